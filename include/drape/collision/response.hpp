@@ -1,0 +1,260 @@
+#pragma once
+// Contact response (DESIGN 4): project vertices and faces to the thickness, split each contact vertex's
+// velocity relative to the solid into a normal part (attenuated) and a tangential part (kept, Coulomb
+// friction), and propagate the normal corrections to neighbouring vertices.
+
+#include <drape/cloth/asset.hpp>
+#include <drape/collision/pgd.hpp>
+#include <drape/sdf/solid.hpp>
+
+#include <cstdint>
+#include <vector>
+
+namespace drape {
+
+/// Per-vertex contact records of one substep. A record is live when stamp[i] == current, so nothing is
+/// cleared per substep; `list` holds the live vertices in the order they were first touched.
+template <Scalar S> struct ContactBuffer {
+  std::vector<std::uint32_t> stamp;
+  std::uint32_t current = 0;
+  std::vector<Index> list;
+  std::vector<Vec3<S>> normal;         ///< outward normal of the solid at the contact
+  std::vector<Vec3<S>> solidVelocity;  ///< v_c at the vertex
+  std::vector<S> correction;           ///< normal position correction this substep (m)
+  std::vector<S> staticFriction, dynamicFriction;
+  std::vector<S> normalDv;  ///< normal velocity change the response made (m/s), the source of propagation
+
+  void resize(Index n) {
+    stamp.assign(n, 0);
+    current = 0;
+    list.clear();
+    list.reserve(n);
+    normal.resize(n);
+    solidVelocity.resize(n);
+    correction.resize(n);
+    staticFriction.resize(n);
+    dynamicFriction.resize(n);
+    normalDv.resize(n);
+  }
+  void begin() {
+    list.clear();
+    if (++current == 0) {  // wrapped after 2^32 substeps: restart the stamps
+      std::fill(stamp.begin(), stamp.end(), 0);
+      current = 1;
+    }
+  }
+  bool live(Index i) const { return stamp[i] == current; }
+  void record(Index i, const Vec3<S>& n, const Vec3<S>& vc, S dn, const SolidMotion<S>& m) {
+    if (stamp[i] != current) {
+      stamp[i] = current;
+      list.push_back(i);  // capacity is the vertex count: never allocates
+      correction[i] = dn;
+    } else {
+      correction[i] += dn;
+    }
+    normal[i] = n;
+    solidVelocity[i] = vc;
+    staticFriction[i] = m.staticFriction;
+    dynamicFriction[i] = m.dynamicFriction;
+  }
+};
+
+/// Counters of the last substep's collision work, for tests and benches.
+struct CollisionStats {
+  std::int64_t facesTested = 0;   ///< face-solid pairs considered
+  std::int64_t facesCulled = 0;   ///< of those, rejected by the bounding sphere
+  std::int64_t faceContacts = 0;  ///< face-solid pairs whose deepest point was within the thickness
+  std::int64_t vertexContacts = 0;
+  std::int64_t sdfEvaluations = 0;
+};
+
+/// Moves every free vertex closer than `thickness` out along the normal and records the contact.
+template <class Shape, Scalar S>
+void projectVertexContacts(const CompiledSolid<Shape, S>& solid, S thickness, Vec3<S>* x, const S* invMass,
+                           Index vertexCount, ContactBuffer<S>& contacts, CollisionStats& stats) {
+  for (Index i = 0; i < vertexCount; ++i) {
+    Vec3<S> n;
+    const S phi = solid.sdf(x[i], n);
+    if (phi >= thickness || invMass[i] == S(0)) continue;
+    const S dn = thickness - phi;
+    x[i] += dn * n;
+    contacts.record(i, n, solid.motion.velocityAt(x[i]), dn, solid.motion);
+    ++stats.vertexContacts;
+  }
+  stats.sdfEvaluations += vertexCount;
+}
+
+/// For every face: cull by bounding sphere (when kCull), find the deepest point by PGD, and if it is closer
+/// than `thickness`, move the face's vertices, weighted by barycentric weight and inverse mass
+/// (dx_i = w_i b_i / sum_j w_j b_j^2 * depth * n), so that point reaches the thickness.
+template <bool kCull, class Shape, Scalar S>
+void projectFaceContacts(const CompiledSolid<Shape, S>& solid, S thickness, int pgdIterations,
+                         const std::vector<std::array<Index, 3>>& triangles, Vec3<S>* x, const S* invMass,
+                         ContactBuffer<S>& contacts, CollisionStats& stats) {
+  for (const auto& t : triangles) {
+    const FaceSphere<S> sphere = faceSphere<S>(x[t[0]], x[t[1]], x[t[2]]);
+    Vec3<S> gradC;
+    const S phiC = solid.sdf(sphere.centre, gradC);
+    if constexpr (kCull) {
+      if (phiC > sphere.radius + thickness) {
+        ++stats.facesCulled;
+        ++stats.sdfEvaluations;
+        continue;
+      }
+    }
+    const FaceQuery<S> q =
+        deepestPointOnFace<S>(solid.sdf, x[t[0]], x[t[1]], x[t[2]], sphere.centre, phiC, gradC, pgdIterations);
+    stats.sdfEvaluations += q.evaluations;
+    if (q.phi >= thickness) continue;
+    const Vec3<S> wb(invMass[t[0]] * q.barycentric[0], invMass[t[1]] * q.barycentric[1],
+                     invMass[t[2]] * q.barycentric[2]);
+    const S denom = wb.dot(q.barycentric);
+    if (denom <= S(0)) continue;
+    ++stats.faceContacts;
+    const S depth = thickness - q.phi;
+    for (int k = 0; k < 3; ++k) {
+      if (wb[k] <= S(0)) continue;
+      const S dn = wb[k] / denom * depth;
+      x[t[k]] += dn * q.normal;
+      contacts.record(t[k], q.normal, solid.motion.velocityAt(x[t[k]]), dn, solid.motion);
+    }
+  }
+  stats.facesTested += Index(triangles.size());
+}
+
+/// The velocity split of paper 002 (Fig 3) for every contact vertex, relative to the solid: the approaching
+/// normal velocity is removed, a separating one is damped by normalDamping, the tangential velocity is kept
+/// minus Coulomb friction. Static friction acts on positions: a tangential displacement (relative to the
+/// solid, this substep) within staticFriction times the normal correction is undone, so a cloth that should
+/// stick does not creep g sin(theta) h per substep. Kinetic friction removes at most dynamicFriction times the
+/// normal velocity change from the tangential speed.
+template <Scalar S>
+void respondContacts(ContactBuffer<S>& contacts, Vec3<S>* x, const Vec3<S>* xPrev, Vec3<S>* v, S h,
+                     S normalDamping) {
+  for (const Index i : contacts.list) {
+    const Vec3<S>& n = contacts.normal[i];
+    const Vec3<S>& vc = contacts.solidVelocity[i];
+    const Vec3<S> vRel = v[i] - vc;
+    const S vn = n.dot(vRel);
+    Vec3<S> vt = vRel - vn * n;
+    const S vnNew = vn < S(0) ? S(0) : vn * (S(1) - normalDamping);
+    const S dvn = vnNew - vn;
+    const Vec3<S> disp = (x[i] - xPrev[i]) - h * vc;
+    const Vec3<S> dispT = disp - n.dot(disp) * n;
+    const S stick = contacts.staticFriction[i] * contacts.correction[i];
+    if (dispT.squaredNorm() <= stick * stick) {
+      x[i] -= dispT;
+      vt.setZero();
+    } else {
+      const S speed = vt.norm();
+      const S slow = contacts.dynamicFriction[i] * std::abs(dvn);
+      vt *= speed > slow ? (speed - slow) / speed : S(0);
+    }
+    v[i] = vc + vnNew * n + vt;
+    contacts.normalDv[i] = std::max(dvn, S(0));
+  }
+}
+
+/// Scratch for propagation rings.
+template <Scalar S> struct PropagationBuffer {
+  std::vector<std::uint32_t> stamp;
+  std::vector<Vec3<S>> normalSum, velocitySum;
+  std::vector<S> amountSum, amount;
+  std::vector<Index> count;
+  std::vector<Index> sources, next;
+
+  void resize(Index n) {
+    stamp.assign(n, 0);
+    normalSum.resize(n);
+    velocitySum.resize(n);
+    amountSum.resize(n);
+    amount.resize(n);
+    count.resize(n);
+    sources.reserve(n);
+    next.reserve(n);
+  }
+};
+
+/// Spreads the contacts' normal velocity corrections to the vertices around them (paper 002): ring r gets
+/// weight^r of the mean correction of its sources, along their mean normal, and only as much as removes its
+/// own approach toward the solid, so a neighbour is never pushed away (which would make the seam shake).
+template <Scalar S>
+void propagateCorrections(const ContactBuffer<S>& contacts, PropagationBuffer<S>& buf, const Adjacency& neighbours,
+                          Vec3<S>* v, const S* invMass, S weight, int rings) {
+  // Sources of ring 1 are the contact vertices; their amount is their own normal velocity change.
+  buf.sources.assign(contacts.list.begin(), contacts.list.end());
+  for (const Index i : contacts.list) buf.amount[i] = contacts.normalDv[i];
+  const std::uint32_t mark = contacts.current;
+  for (int ring = 0; ring < rings; ++ring) {
+    buf.next.clear();
+    for (const Index i : buf.sources) {
+      if (buf.amount[i] <= S(0)) continue;
+      const bool fromContact = ring == 0;
+      const Vec3<S>& n = fromContact ? contacts.normal[i] : buf.normalSum[i];
+      const Vec3<S>& vc = fromContact ? contacts.solidVelocity[i] : buf.velocitySum[i];
+      for (const Index* it = neighbours.begin(i); it != neighbours.end(i); ++it) {
+        const Index j = *it;
+        if (contacts.stamp[j] == mark || invMass[j] == S(0)) continue;
+        if (buf.stamp[j] != mark) {  // first time j is reached (rings never revisit a vertex)
+          buf.stamp[j] = mark;
+          buf.normalSum[j].setZero();
+          buf.velocitySum[j].setZero();
+          buf.amountSum[j] = 0;
+          buf.count[j] = 0;
+          buf.next.push_back(j);
+        } else if (buf.count[j] < 0) {
+          continue;  // already settled in an earlier ring
+        }
+        buf.normalSum[j] += n;
+        buf.velocitySum[j] += vc;
+        buf.amountSum[j] += buf.amount[i];
+        ++buf.count[j];
+      }
+    }
+    for (const Index j : buf.next) {
+      const S len = buf.normalSum[j].norm();
+      const S inv = S(1) / S(buf.count[j]);
+      buf.count[j] = -1;
+      buf.amount[j] = 0;
+      if (len <= S(0)) continue;
+      const Vec3<S> n = buf.normalSum[j] / len;
+      const Vec3<S> vc = buf.velocitySum[j] * inv;
+      const S approach = -n.dot(v[j] - vc);
+      const S give = weight * buf.amountSum[j] * inv;
+      if (approach > S(0)) {
+        const S applied = std::min(approach, give);
+        v[j] += applied * n;
+      }
+      // The next ring sees this ring's share, not what it happened to need.
+      buf.amount[j] = give;
+      buf.normalSum[j] = n;
+      buf.velocitySum[j] = vc;
+    }
+    buf.sources.swap(buf.next);
+  }
+}
+
+/// Baseline (the "previous method"): inside the constraint solve, push free vertices out to the thickness,
+/// with position-level Coulomb friction (Mueller et al. 2007). The velocity later comes from positions.
+template <class Shape, Scalar S>
+void projectVerticesBaseline(const CompiledSolid<Shape, S>& solid, S thickness, S h, Vec3<S>* x,
+                             const Vec3<S>* xPrev, const S* invMass, Index vertexCount, CollisionStats& stats) {
+  for (Index i = 0; i < vertexCount; ++i) {
+    Vec3<S> n;
+    const S phi = solid.sdf(x[i], n);
+    if (phi >= thickness || invMass[i] == S(0)) continue;
+    const S dn = thickness - phi;
+    x[i] += dn * n;
+    const Vec3<S> disp = (x[i] - xPrev[i]) - h * solid.motion.velocityAt(x[i]);
+    const Vec3<S> dispT = disp - n.dot(disp) * n;
+    const S len = dispT.norm();
+    if (len <= solid.motion.staticFriction * dn)
+      x[i] -= dispT;
+    else if (len > S(0))
+      x[i] -= std::min(S(1), solid.motion.dynamicFriction * dn / len) * dispT;
+    ++stats.vertexContacts;
+  }
+  stats.sdfEvaluations += vertexCount;
+}
+
+}  // namespace drape

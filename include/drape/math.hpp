@@ -1,0 +1,59 @@
+#pragma once
+// Eigen aliases, the library's error type, rigid poses and input checks.
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include <cmath>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <type_traits>
+
+namespace drape {
+
+/// Vertex, face and constraint indices.
+using Index = std::int32_t;
+
+template <class S> using Vec2 = Eigen::Matrix<S, 2, 1>;
+template <class S> using Vec3 = Eigen::Matrix<S, 3, 1>;
+template <class S> using Mat3 = Eigen::Matrix<S, 3, 3>;
+
+/// Scalars the solver is instantiated for.
+template <class S>
+concept Scalar = std::is_same_v<S, float> || std::is_same_v<S, double>;
+
+/// Every rejected input throws this, with a message that names what was wrong. It is thrown before any
+/// state changes.
+struct Error : std::invalid_argument {
+  using std::invalid_argument::invalid_argument;
+};
+
+/// A rigid placement in world coordinates (metres), always in double so that large worlds stay exact.
+struct Pose {
+  Eigen::Quaterniond rotation = Eigen::Quaterniond::Identity();
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();
+
+  Eigen::Vector3d apply(const Eigen::Vector3d& local) const { return rotation * local + position; }
+};
+
+namespace detail {
+
+template <class Derived> bool allFinite(const Eigen::MatrixBase<Derived>& m) { return m.allFinite(); }
+
+inline void require(bool ok, const std::string& what) {
+  if (!ok) throw Error("drape: " + what);
+}
+
+inline void requireFinite(double value, const std::string& name) {
+  require(std::isfinite(value), name + " must be finite (got " + std::to_string(value) + ")");
+}
+
+inline void requireRange(double value, double lo, double hi, const std::string& name) {
+  require(std::isfinite(value) && value >= lo && value <= hi,
+          name + " must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "] (got " +
+              std::to_string(value) + ")");
+}
+
+}  // namespace detail
+}  // namespace drape

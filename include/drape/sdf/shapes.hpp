@@ -1,0 +1,140 @@
+#pragma once
+// Solids as signed distance fields: phi(x) < 0 inside, the gradient is the outward unit normal and phi is
+// 1-Lipschitz (the face culling relies on it). Shapes are described in double in their own frame; the solver
+// compiles each one, once per substep, into an Sdf of the cloth's scalar type, relative to the cloth's local
+// origin, so float keeps its precision far from the world origin.
+
+#include <drape/math.hpp>
+
+#include <algorithm>
+#include <string>
+
+namespace drape {
+
+/// The half-space below the solid frame's z = 0 plane; the outward normal is the frame's +z.
+struct Plane {};
+/// A ball centred on the solid frame's origin.
+struct Sphere {
+  double radius = 0.5;  ///< m
+};
+/// A box centred on the solid frame's origin, aligned with its axes.
+struct Box {
+  Eigen::Vector3d halfExtents{0.5, 0.5, 0.5};  ///< m
+};
+/// Points within `radius` of the segment from -halfHeight to +halfHeight along the solid frame's z axis.
+struct Capsule {
+  double radius = 0.1;      ///< m
+  double halfHeight = 0.5;  ///< m, half the length of the core segment
+};
+
+template <class Shape, Scalar S> struct Sdf;
+
+template <Scalar S> struct Sdf<Plane, S> {
+  static constexpr bool kLinear = true;  ///< phi is linear: its minimum over a face is at a vertex
+  Vec3<S> normal;
+  S offset;  ///< phi(x) = normal . x - offset
+
+  S operator()(const Vec3<S>& x, Vec3<S>& gradient) const {
+    gradient = normal;
+    return normal.dot(x) - offset;
+  }
+};
+
+template <Scalar S> struct Sdf<Sphere, S> {
+  static constexpr bool kLinear = false;
+  Vec3<S> centre;
+  S radius;
+
+  S operator()(const Vec3<S>& x, Vec3<S>& gradient) const {
+    const Vec3<S> d = x - centre;
+    const S len = d.norm();
+    gradient = len > S(0) ? Vec3<S>(d / len) : Vec3<S>::UnitZ();
+    return len - radius;
+  }
+};
+
+template <Scalar S> struct Sdf<Box, S> {
+  static constexpr bool kLinear = false;
+  Mat3<S> toLocal;  ///< rotation world -> box frame
+  Vec3<S> centre;
+  Vec3<S> halfExtents;
+
+  S operator()(const Vec3<S>& x, Vec3<S>& gradient) const {
+    const Vec3<S> q = toLocal * (x - centre);
+    const Vec3<S> excess = q.cwiseAbs() - halfExtents;
+    const Vec3<S> outside = excess.cwiseMax(S(0));
+    const S outsideLen = outside.norm();
+    Vec3<S> g;
+    S phi;
+    if (outsideLen > S(0)) {
+      g = outside.cwiseProduct(q.cwiseSign()) / outsideLen;
+      phi = outsideLen;
+    } else {  // inside: the nearest face wins
+      Index k = 0;
+      phi = excess.maxCoeff(&k);
+      g = Vec3<S>::Zero();
+      g[k] = q[k] < S(0) ? S(-1) : S(1);
+    }
+    gradient = toLocal.transpose() * g;
+    return phi;
+  }
+};
+
+template <Scalar S> struct Sdf<Capsule, S> {
+  static constexpr bool kLinear = false;
+  Vec3<S> centre;
+  Vec3<S> axis;  ///< unit, world
+  S halfHeight;
+  S radius;
+
+  S operator()(const Vec3<S>& x, Vec3<S>& gradient) const {
+    const Vec3<S> r = x - centre;
+    const S t = std::clamp(r.dot(axis), -halfHeight, halfHeight);
+    const Vec3<S> d = r - t * axis;
+    const S len = d.norm();
+    if (len > S(0)) {
+      gradient = d / len;
+    } else {  // on the core segment: any direction perpendicular to the axis
+      gradient = axis.unitOrthogonal();
+    }
+    return len - radius;
+  }
+};
+
+namespace detail {
+
+inline void validateShape(const Plane&) {}
+inline void validateShape(const Sphere& s) {
+  require(std::isfinite(s.radius) && s.radius > 0, "sphere radius must be positive and finite (got " +
+                                                       std::to_string(s.radius) + ")");
+}
+inline void validateShape(const Box& b) {
+  require(b.halfExtents.allFinite() && (b.halfExtents.array() > 0).all(),
+          "box half extents must be positive and finite");
+}
+inline void validateShape(const Capsule& c) {
+  require(std::isfinite(c.radius) && c.radius > 0, "capsule radius must be positive and finite (got " +
+                                                       std::to_string(c.radius) + ")");
+  require(std::isfinite(c.halfHeight) && c.halfHeight >= 0,
+          "capsule halfHeight must be non-negative and finite (got " + std::to_string(c.halfHeight) + ")");
+}
+
+/// Builds the Sdf of a shape placed by `pose`, relative to `origin`.
+template <Scalar S> Sdf<Plane, S> compileSdf(const Plane&, const Pose& pose, const Eigen::Vector3d& origin) {
+  const Eigen::Vector3d n = pose.rotation * Eigen::Vector3d::UnitZ();
+  return {n.template cast<S>(), S(n.dot(pose.position - origin))};
+}
+template <Scalar S> Sdf<Sphere, S> compileSdf(const Sphere& s, const Pose& pose, const Eigen::Vector3d& origin) {
+  return {(pose.position - origin).template cast<S>(), S(s.radius)};
+}
+template <Scalar S> Sdf<Box, S> compileSdf(const Box& b, const Pose& pose, const Eigen::Vector3d& origin) {
+  return {pose.rotation.toRotationMatrix().transpose().template cast<S>(), (pose.position - origin).template cast<S>(),
+          b.halfExtents.template cast<S>()};
+}
+template <Scalar S> Sdf<Capsule, S> compileSdf(const Capsule& c, const Pose& pose, const Eigen::Vector3d& origin) {
+  return {(pose.position - origin).template cast<S>(), (pose.rotation * Eigen::Vector3d::UnitZ()).template cast<S>(),
+          S(c.halfHeight), S(c.radius)};
+}
+
+}  // namespace detail
+}  // namespace drape

@@ -1,0 +1,78 @@
+#pragma once
+// Solver settings: plain fields with defaults and units. validate() names the first bad field.
+
+#include <drape/math.hpp>
+
+#include <string>
+
+namespace drape {
+
+enum class CollisionMethod {
+  /// Paper 002: after the velocity update, vertex and face contacts (PGD) are projected, each contact vertex's
+  /// velocity relative to the solid is split (normal part attenuated, tangential part kept, Coulomb friction),
+  /// and the normal corrections are propagated to neighbouring vertices.
+  Improved,
+  /// The "previous method" paper 002 improves on: contacts are projected inside the constraint solve, the
+  /// velocity comes from positions, no split, no propagation. Kept to compare against.
+  Baseline,
+  /// Vertex contacts only, with the split (cheaper; misses features smaller than the spacing).
+  Vertex,
+};
+
+inline const char* toString(CollisionMethod m) {
+  switch (m) {
+    case CollisionMethod::Improved: return "improved";
+    case CollisionMethod::Baseline: return "baseline";
+    case CollisionMethod::Vertex: return "vertex";
+  }
+  return "?";
+}
+
+struct Settings {
+  int subStepCount = 10;   ///< substeps per step(dt); h = dt / subStepCount
+  int iterationCount = 1;  ///< constraint-solve passes per substep
+
+  Eigen::Vector3d gravity{0, 0, -9.81};  ///< m/s^2
+
+  // XPBD compliances (inverse stiffness). 0 is rigid. Distance constraints: m/N.
+  double stretchCompliance = 0;   ///< structural edges
+  double shearCompliance = 0;     ///< grid diagonals
+  double bendingCompliance = 1e-3;  ///< far-vertex pairs across interior edges: small values keep the cloth flat
+  double pinCompliance = 0;       ///< attachments of pinned vertices to their targets
+
+  CollisionMethod collisionMethod = CollisionMethod::Improved;
+  double thickness = 0.005;    ///< m: contacts hold the cloth this far outside each solid
+  double normalDamping = 1;    ///< fraction of the separating normal velocity a contact removes, in [0, 1]
+  int pgdIterations = 8;       ///< most SDF evaluations per face in the deepest-point search (>= 1)
+  bool culling = true;         ///< bounding-sphere culling of faces (exact: it never drops a contact)
+  double propagationWeight = 0.5;  ///< share of a contact's normal velocity correction given to neighbours
+  int propagationRings = 1;        ///< how many rings of neighbours receive it (0: none)
+
+  /// Throws drape::Error naming the first out-of-range field.
+  void validate() const {
+    using detail::require;
+    using detail::requireRange;
+    require(subStepCount >= 1 && subStepCount <= 10000,
+            "subStepCount must be in [1, 10000] (got " + std::to_string(subStepCount) + ")");
+    require(iterationCount >= 1 && iterationCount <= 1000,
+            "iterationCount must be in [1, 1000] (got " + std::to_string(iterationCount) + ")");
+    require(gravity.allFinite(), "gravity must be finite");
+    requireRange(stretchCompliance, 0, 1e6, "stretchCompliance");
+    requireRange(shearCompliance, 0, 1e6, "shearCompliance");
+    requireRange(bendingCompliance, 0, 1e6, "bendingCompliance");
+    requireRange(pinCompliance, 0, 1e6, "pinCompliance");
+    require(collisionMethod == CollisionMethod::Improved || collisionMethod == CollisionMethod::Baseline ||
+                collisionMethod == CollisionMethod::Vertex,
+            "collisionMethod is not one of improved, baseline, vertex");
+    require(std::isfinite(thickness) && thickness > 0 && thickness <= 1,
+            "thickness must be in (0, 1] m (got " + std::to_string(thickness) + ")");
+    requireRange(normalDamping, 0, 1, "normalDamping");
+    require(pgdIterations >= 1 && pgdIterations <= 1000,
+            "pgdIterations must be in [1, 1000] (got " + std::to_string(pgdIterations) + ")");
+    requireRange(propagationWeight, 0, 1, "propagationWeight");
+    require(propagationRings >= 0 && propagationRings <= 8,
+            "propagationRings must be in [0, 8] (got " + std::to_string(propagationRings) + ")");
+  }
+};
+
+}  // namespace drape

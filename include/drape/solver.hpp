@@ -1,0 +1,309 @@
+#pragma once
+// The substep loop (DESIGN 1, paper 002 Algorithm 1):
+//   for each substep: predict, iterationCount constraint passes, velocity update, collide.
+// Solid types are template parameters: a type the scene does not use is an empty array that no loop visits.
+
+#include <drape/cloth/asset.hpp>
+#include <drape/cloth/state.hpp>
+#include <drape/collision/pgd.hpp>
+#include <drape/collision/response.hpp>
+#include <drape/constraints/distance.hpp>
+#include <drape/sdf/solid.hpp>
+#include <drape/settings.hpp>
+
+#include <memory>
+#include <tuple>
+#include <type_traits>
+#include <utility>
+#include <vector>
+
+namespace drape {
+
+/// A kinematic attachment of a vertex to a world point.
+struct Pin {
+  Index vertex;
+  Eigen::Vector3d target;  ///< world (m)
+};
+
+template <Scalar S, class... Shapes> class BasicSolver {
+ public:
+  using scalar_type = S;
+
+  /// asset: shared topology; areaDensity: kg/m^2, giving each vertex a third of its faces' mass.
+  explicit BasicSolver(std::shared_ptr<const ClothAsset<S>> asset, const Settings& settings = {},
+                       double areaDensity = 0.1)
+      : asset_((detail::require(asset != nullptr, "the cloth asset is null"), std::move(asset))),
+        settings_((settings.validate(), settings)),
+        state_(ClothState<S>::fromAsset(*asset_, areaDensity)) {
+    const Index n = asset_->vertexCount();
+    xPrev_.resize(n);
+    lambdaStretch_.resize(asset_->stretch.size());
+    lambdaShear_.resize(asset_->shear.size());
+    lambdaBending_.resize(asset_->bending.size());
+    contacts_.resize(n);
+    propagation_.resize(n);
+  }
+
+  // --- settings -------------------------------------------------------------------------------------------
+  const Settings& settings() const { return settings_; }
+  void setSettings(const Settings& s) {
+    s.validate();
+    settings_ = s;
+  }
+
+  // --- cloth ----------------------------------------------------------------------------------------------
+  const ClothAsset<S>& asset() const { return *asset_; }
+  const ClothState<S>& state() const { return state_; }
+  Index vertexCount() const { return asset_->vertexCount(); }
+  Eigen::Vector3d position(Index i) const { return state_.origin + state_.x[checkVertex(i)].template cast<double>(); }
+  Eigen::Vector3d velocity(Index i) const { return state_.v[checkVertex(i)].template cast<double>(); }
+
+  /// Replaces all positions (world, m). Rejects a wrong count or a non-finite value before changing anything.
+  void setPositions(const std::vector<Eigen::Vector3d>& world) {
+    detail::require(Index(world.size()) == vertexCount(),
+                    "setPositions got " + std::to_string(world.size()) + " positions for " +
+                        std::to_string(vertexCount()) + " vertices");
+    for (std::size_t i = 0; i < world.size(); ++i)
+      detail::require(world[i].allFinite(), "position of vertex " + std::to_string(i) + " is not finite");
+    for (std::size_t i = 0; i < world.size(); ++i) state_.x[i] = (world[i] - state_.origin).template cast<S>();
+  }
+  /// Replaces all velocities (m/s), with the same checks.
+  void setVelocities(const std::vector<Eigen::Vector3d>& v) {
+    detail::require(Index(v.size()) == vertexCount(), "setVelocities got " + std::to_string(v.size()) +
+                                                          " velocities for " + std::to_string(vertexCount()) +
+                                                          " vertices");
+    for (std::size_t i = 0; i < v.size(); ++i)
+      detail::require(v[i].allFinite(), "velocity of vertex " + std::to_string(i) + " is not finite");
+    for (std::size_t i = 0; i < v.size(); ++i) state_.v[i] = v[i].template cast<S>();
+  }
+  /// Sets one vertex's inverse mass (1/kg); 0 pins it where it is.
+  void setInverseMass(Index i, double invMass) {
+    checkVertex(i);
+    detail::require(std::isfinite(invMass) && invMass >= 0, "inverse mass of vertex " + std::to_string(i) +
+                                                                 " must be finite and >= 0 (got " +
+                                                                 std::to_string(invMass) + ")");
+    state_.invMass[i] = S(invMass);
+    if (invMass == 0) state_.v[i].setZero();
+  }
+  /// Fixes a vertex where it is (inverse mass 0).
+  void pin(Index i) { setInverseMass(i, 0); }
+  /// Attaches a vertex to a world target; with pinCompliance 0 and inverse mass 0 it follows the target
+  /// exactly, otherwise it is pulled by a zero-length XPBD constraint. Returns the pin's index.
+  Index attach(Index i, const Eigen::Vector3d& target) {
+    checkVertex(i);
+    detail::require(target.allFinite(), "pin target of vertex " + std::to_string(i) + " is not finite");
+    pins_.push_back({i, target});
+    pinLocal_.push_back({i, Vec3<S>::Zero()});
+    lambdaPins_.push_back(0);
+    return Index(pins_.size()) - 1;
+  }
+  void setPinTarget(Index pin, const Eigen::Vector3d& target) {
+    detail::require(pin >= 0 && pin < Index(pins_.size()), "pin index " + std::to_string(pin) + " out of range");
+    detail::require(target.allFinite(), "pin target is not finite");
+    pins_[pin].target = target;
+  }
+  const std::vector<Pin>& pins() const { return pins_; }
+
+  // --- solids ---------------------------------------------------------------------------------------------
+  template <class Shape> Index addSolid(const Solid<Shape>& solid) {
+    static_assert((std::is_same_v<Shape, Shapes> || ...), "this solver was not declared with that shape type");
+    detail::validateSolid(solid, "solid");
+    auto& list = std::get<std::vector<Solid<Shape>>>(solids_);
+    list.push_back(solid);
+    std::get<std::vector<CompiledSolid<Shape, S>>>(compiled_).resize(list.size());
+    return Index(list.size()) - 1;
+  }
+  template <class Shape> const Solid<Shape>& solid(Index k) const {
+    const auto& list = std::get<std::vector<Solid<Shape>>>(solids_);
+    detail::require(k >= 0 && k < Index(list.size()), "solid index " + std::to_string(k) + " out of range");
+    return list[k];
+  }
+  template <class Shape> void setSolid(Index k, const Solid<Shape>& s) {
+    auto& list = std::get<std::vector<Solid<Shape>>>(solids_);
+    detail::require(k >= 0 && k < Index(list.size()), "solid index " + std::to_string(k) + " out of range");
+    detail::validateSolid(s, "solid " + std::to_string(k));
+    list[k] = s;
+  }
+  /// Calls f(const CompiledSolid<Shape, S>&) for every solid, compiled at the current local origin.
+  template <class F> void forEachSolid(F&& f) const {
+    std::apply(
+        [&](const auto&... lists) {
+          (
+              [&](const auto& list) {
+                for (const auto& s : list) f(detail::compileSolid<std::decay_t<decltype(s.shape)>, S>(s, state_.origin));
+              }(lists),
+              ...);
+        },
+        solids_);
+  }
+
+  // --- stepping -------------------------------------------------------------------------------------------
+  /// Advances by dt seconds in subStepCount substeps.
+  void step(double dt) {
+    step(dt, [](const BasicSolver&) {});
+  }
+  /// The same, calling onSubStep(solver) after every substep (for metrics and tests).
+  template <class Observer> void step(double dt, Observer&& onSubStep) {
+    detail::require(std::isfinite(dt) && dt > 0 && dt <= 10,
+                    "step dt must be in (0, 10] s (got " + std::to_string(dt) + ")");
+    rebase();
+    const double h = dt / settings_.subStepCount;
+    for (int sub = 0; sub < settings_.subStepCount; ++sub) {
+      subStep(h);
+      onSubStep(std::as_const(*this));
+    }
+  }
+
+  /// Collision work of the last substep.
+  const CollisionStats& stats() const { return stats_; }
+  /// Contact records of the last substep (improved and vertex methods).
+  const ContactBuffer<S>& contacts() const { return contacts_; }
+
+ private:
+  Index checkVertex(Index i) const {
+    detail::require(i >= 0 && i < vertexCount(), "vertex index " + std::to_string(i) + " out of range [0, " +
+                                                     std::to_string(vertexCount()) + ")");
+    return i;
+  }
+
+  /// Moves the local origin to follow the cloth, in steps of 1/64 m so the shift is exact in float.
+  void rebase() {
+    Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+    for (const auto& p : state_.x) centre += p.template cast<double>();
+    centre /= double(state_.x.size());
+    if (centre.norm() < kRebaseDistance) return;
+    const Eigen::Vector3d shift = (centre * 64.0).array().round().matrix() / 64.0;
+    const Vec3<S> shiftS = shift.cast<S>();
+    for (auto& p : state_.x) p -= shiftS;
+    state_.origin += shift;
+  }
+
+  template <class F> void forEachCompiled(F&& f) {
+    std::apply([&](auto&... lists) { (f(lists), ...); }, compiled_);
+  }
+
+  void prepareSolids(double h) {
+    std::apply(
+        [&](auto&... lists) {
+          (
+              [&](auto& list) {
+                using Shape = std::decay_t<decltype(list[0].shape)>;
+                auto& out = std::get<std::vector<CompiledSolid<Shape, S>>>(compiled_);
+                for (std::size_t k = 0; k < list.size(); ++k) {
+                  detail::advancePose(list[k], h);
+                  out[k] = detail::compileSolid<Shape, S>(list[k], state_.origin);
+                }
+              }(lists),
+              ...);
+        },
+        solids_);
+    for (std::size_t k = 0; k < pins_.size(); ++k)
+      pinLocal_[k].target = (pins_[k].target - state_.origin).template cast<S>();
+  }
+
+  void subStep(double hd) {
+    prepareSolids(hd);
+    stats_ = {};
+    const S h = S(hd);
+    const Index n = vertexCount();
+    Vec3<S>* x = state_.x.data();
+    Vec3<S>* v = state_.v.data();
+    const S* w = state_.invMass.data();
+    const ClothAsset<S>& a = *asset_;
+
+    // 1. predict
+    const Vec3<S> gh = (settings_.gravity * hd).template cast<S>();
+    for (Index i = 0; i < n; ++i) {
+      xPrev_[i] = x[i];
+      if (w[i] == S(0)) continue;
+      v[i] += gh;
+      x[i] += h * v[i];
+    }
+
+    // 2. solve
+    const S h2 = h * h;
+    std::fill(lambdaStretch_.begin(), lambdaStretch_.end(), S(0));
+    std::fill(lambdaShear_.begin(), lambdaShear_.end(), S(0));
+    std::fill(lambdaBending_.begin(), lambdaBending_.end(), S(0));
+    std::fill(lambdaPins_.begin(), lambdaPins_.end(), S(0));
+    const S stretchAlpha = S(settings_.stretchCompliance) / h2, shearAlpha = S(settings_.shearCompliance) / h2,
+            bendingAlpha = S(settings_.bendingCompliance) / h2, pinAlpha = S(settings_.pinCompliance) / h2;
+    const S thickness = S(settings_.thickness);
+    const bool baseline = settings_.collisionMethod == CollisionMethod::Baseline;
+    for (int it = 0; it < settings_.iterationCount; ++it) {
+      solveDistanceSet(a.stretch, stretchAlpha, lambdaStretch_.data(), x, w);
+      solveDistanceSet(a.shear, shearAlpha, lambdaShear_.data(), x, w);
+      solveDistanceSet(a.bending, bendingAlpha, lambdaBending_.data(), x, w);
+      solvePins(pinLocal_.data(), Index(pinLocal_.size()), pinAlpha, lambdaPins_.data(), x, w);
+      if (baseline) collideBaseline(h, thickness);
+    }
+
+    // 3. update velocity
+    const S invH = S(1) / h;
+    for (Index i = 0; i < n; ++i) v[i] = (x[i] - xPrev_[i]) * invH;
+
+    // 4. collide
+    if (!baseline) collide(h, thickness);
+  }
+
+  void collideBaseline(S h, S thickness) {
+    Vec3<S>* x = state_.x.data();
+    const S* w = state_.invMass.data();
+    contacts_.begin();
+    forEachCompiled([&](auto& list) {
+      for (const auto& solid : list) {
+        projectVerticesBaseline(solid, thickness, h, x, xPrev_.data(), w, vertexCount(), stats_);
+        if constexpr (!std::decay_t<decltype(solid.sdf)>::kLinear)
+          projectFaceContacts<true>(solid, thickness, settings_.pgdIterations, asset_->triangles, x, w, contacts_,
+                                    stats_);
+      }
+    });
+  }
+
+  void collide(S h, S thickness) {
+    Vec3<S>* x = state_.x.data();
+    Vec3<S>* v = state_.v.data();
+    const S* w = state_.invMass.data();
+    const bool faces = settings_.collisionMethod == CollisionMethod::Improved;
+    const bool cull = settings_.culling;
+    contacts_.begin();
+    forEachCompiled([&](auto& list) {
+      for (const auto& solid : list) {
+        projectVertexContacts(solid, thickness, x, w, vertexCount(), contacts_, stats_);
+        // On a linear field a face is deepest at a vertex, which the vertex pass has already handled.
+        if constexpr (!std::decay_t<decltype(solid.sdf)>::kLinear) {
+          if (faces && cull)
+            projectFaceContacts<true>(solid, thickness, settings_.pgdIterations, asset_->triangles, x, w,
+                                      contacts_, stats_);
+          else if (faces)
+            projectFaceContacts<false>(solid, thickness, settings_.pgdIterations, asset_->triangles, x, w,
+                                       contacts_, stats_);
+        }
+      }
+    });
+    respondContacts(contacts_, x, xPrev_.data(), v, h, S(settings_.normalDamping));
+    if (faces && settings_.propagationRings > 0 && settings_.propagationWeight > 0)
+      propagateCorrections(contacts_, propagation_, asset_->vertexNeighbours, v, w, S(settings_.propagationWeight),
+                           settings_.propagationRings);
+  }
+
+  static constexpr double kRebaseDistance = 0.5;  ///< m the cloth may drift from its local origin
+
+  std::shared_ptr<const ClothAsset<S>> asset_;
+  Settings settings_;
+  ClothState<S> state_;
+  std::tuple<std::vector<Solid<Shapes>>...> solids_;
+  std::tuple<std::vector<CompiledSolid<Shapes, S>>...> compiled_;
+  std::vector<Pin> pins_;
+  std::vector<PinTarget<S>> pinLocal_;
+  std::vector<Vec3<S>> xPrev_;
+  std::vector<S> lambdaStretch_, lambdaShear_, lambdaBending_, lambdaPins_;
+  ContactBuffer<S> contacts_;
+  PropagationBuffer<S> propagation_;
+  CollisionStats stats_;
+};
+
+/// The solver with every built-in shape.
+template <Scalar S> using Solver = BasicSolver<S, Plane, Sphere, Box, Capsule>;
+
+}  // namespace drape

@@ -1,0 +1,6 @@
+#pragma once
+
+#define DRAPE_VERSION_MAJOR 0
+#define DRAPE_VERSION_MINOR 1
+#define DRAPE_VERSION_PATCH 0
+#define DRAPE_VERSION_STRING "0.1.0"

@@ -1,0 +1,198 @@
+#pragma once
+// The inclined-plane scene of paper 002 (Figs 5 and 8): a horizontal cloth above a slope falls, lands and
+// slides. Shared by the sample, the tests and the benches, so all three measure the same thing.
+
+#include <drape/drape.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <functional>
+#include <numbers>
+#include <string>
+#include <vector>
+
+namespace drape::scenes {
+
+struct SlopeConfig {
+  double angleDeg = 30;  ///< slope angle; 0 is a flat floor
+  double friction = 0;   ///< static and dynamic Coulomb coefficient of the slope
+  int subSteps = 10;
+  int iterations = 1;
+  int frames = 300;
+  double dt = 1.0 / 60.0;  ///< s per frame
+  int nx = 50, ny = 80;
+  double spacing = 0.02;  ///< m
+  CollisionMethod method = CollisionMethod::Improved;
+  double gap = 0.05;           ///< m, vertical gap between the cloth's uphill edge and the slope at the start
+  double areaDensity = 0.1;    ///< kg/m^2
+  double windowStart = 0.5;    ///< metrics use frames from this fraction of the run to its end
+  bool penetrationEverySubstep = false;  ///< measure penetration after every substep (slow), else every frame
+  std::string traceFile;       ///< CSV per frame, empty for none
+  std::string objDir;          ///< an OBJ per frame, empty for none
+  Settings base{};             ///< everything not set above
+};
+
+struct SlopeResult {
+  int vertices = 0, faces = 0;
+  double msPerFrame = 0;          ///< median wall time of step() (single thread)
+  double nsPerVertexSubstep = 0;
+  double tremblingRms = 0, tremblingMax = 0;  ///< as defined in DESIGN 10
+  double tremblingRmsCentred = 0, tremblingMaxCentred = 0;  ///< with each frame's mean normal velocity removed
+  double acceleration = 0;         ///< fitted downhill acceleration of the centre of mass (m/s^2)
+  double analyticAcceleration = 0; ///< g (sin - mu cos) when tan > mu, else 0
+  double creep = 0;                ///< mean downhill speed over the window (m/s)
+  double maxPenetration = 0;       ///< below the surface (m)
+  double maxShortfall = 0;         ///< inside the thickness shell (m)
+  double meanStrain = 0, maxStrain = 0;
+  double contactFraction = 0;
+  double maxCullFraction = 0;      ///< largest share of faces culled in a substep (airborne cloth)
+  bool finite = true;
+};
+
+inline Eigen::Quaterniond slopeRotation(double angleDeg) {
+  return Eigen::Quaterniond(Eigen::AngleAxisd(angleDeg * std::numbers::pi / 180.0, Eigen::Vector3d::UnitX()));
+}
+
+/// Down the slope, in world coordinates.
+inline Eigen::Vector3d downhill(double angleDeg) { return slopeRotation(angleDeg) * Eigen::Vector3d(0, -1, 0); }
+
+template <Scalar S> Solver<S> makeSlope(const SlopeConfig& c) {
+  detail::requireRange(c.angleDeg, 0, 80, "angle");
+  detail::require(c.frames >= 1, "frames must be >= 1");
+  detail::require(c.nx >= 2 && c.ny >= 2, "nx and ny must be >= 2");
+  detail::requireRange(c.friction, 0, 100, "friction");
+  const double theta = c.angleDeg * std::numbers::pi / 180.0;
+  GridDesc grid;
+  grid.nx = c.nx;
+  grid.ny = c.ny;
+  grid.spacing = c.spacing;
+  const double halfY = 0.5 * (c.ny - 1) * c.spacing;
+  grid.placement.position = Eigen::Vector3d(0, 0, halfY * std::tan(theta) + c.gap);
+  auto asset = std::make_shared<const ClothAsset<S>>(ClothAsset<S>::grid(grid));
+  Settings s = c.base;
+  s.subStepCount = c.subSteps;
+  s.iterationCount = c.iterations;
+  s.collisionMethod = c.method;
+  Solver<S> solver(asset, s, c.areaDensity);
+  Solid<Plane> slope;
+  slope.pose.rotation = slopeRotation(c.angleDeg);
+  slope.staticFriction = slope.dynamicFriction = c.friction;
+  solver.addSolid(slope);
+  return solver;
+}
+
+inline void writeObj(const std::string& path, const std::vector<Eigen::Vector3d>& x,
+                     const std::vector<std::array<Index, 3>>& triangles) {
+  std::ofstream out(path);
+  if (!out) throw Error("cannot write " + path);
+  char line[128];
+  for (const auto& p : x) {
+    std::snprintf(line, sizeof line, "v %.7g %.7g %.7g\n", p.x(), p.y(), p.z());
+    out << line;
+  }
+  for (const auto& t : triangles) out << "f " << t[0] + 1 << ' ' << t[1] + 1 << ' ' << t[2] + 1 << '\n';
+}
+
+template <Scalar S> SlopeResult runSlope(const SlopeConfig& c) {
+  Solver<S> solver = makeSlope<S>(c);
+  const Index n = solver.vertexCount();
+  const double theta = c.angleDeg * std::numbers::pi / 180.0;
+  const double g = c.base.gravity.norm();
+  const Eigen::Vector3d down = downhill(c.angleDeg);
+  const Eigen::Vector3d normal = slopeRotation(c.angleDeg) * Eigen::Vector3d::UnitZ();
+  const Index tracked = (c.ny / 2) * c.nx + c.nx / 2;  // the centre vertex (paper 002, Fig 5)
+  const int windowFrame = std::clamp(int(c.windowStart * c.frames), 1, c.frames);
+
+  SlopeResult r;
+  r.vertices = n;
+  r.faces = solver.asset().faceCount();
+  TrembleMeter meter;
+  std::vector<double> frameMs;
+  std::vector<double> times, speeds;  // downhill speed of the centre of mass per frame, over the window
+  auto centreOfMass = [&] {
+    Eigen::Vector3d c0 = Eigen::Vector3d::Zero();
+    for (Index i = 0; i < n; ++i) c0 += solver.position(i);
+    return Eigen::Vector3d(c0 / double(n));
+  };
+  Eigen::Vector3d com = centreOfMass(), comWindow = com;
+  std::ofstream trace;
+  if (!c.traceFile.empty()) {
+    trace.open(c.traceFile);
+    if (!trace) throw Error("cannot write " + c.traceFile);
+    trace << "time,tracked_height,com_downhill_speed,trembling_rms_so_far,contact_fraction\n";
+  }
+  meter.frame(solver, c.dt, false);
+  auto onSubStep = [&](const Solver<S>& s) {
+    if (c.penetrationEverySubstep) {
+      const auto p = penetration(s);
+      r.maxPenetration = std::max(r.maxPenetration, p.depth);
+      r.maxShortfall = std::max(r.maxShortfall, p.shortfall);
+    }
+    const auto& st = s.stats();
+    if (st.facesTested > 0) r.maxCullFraction = std::max(r.maxCullFraction, double(st.facesCulled) / st.facesTested);
+  };
+  for (int f = 1; f <= c.frames; ++f) {
+    const auto t0 = std::chrono::steady_clock::now();
+    if (c.penetrationEverySubstep)
+      solver.step(c.dt, onSubStep);
+    else
+      solver.step(c.dt);
+    frameMs.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    if (!c.penetrationEverySubstep) {
+      const auto p = penetration(solver);
+      r.maxPenetration = std::max(r.maxPenetration, p.depth);
+      r.maxShortfall = std::max(r.maxShortfall, p.shortfall);
+    }
+    const bool inWindow = f > windowFrame;
+    meter.frame(solver, c.dt, inWindow);
+    const Eigen::Vector3d comNow = centreOfMass();
+    const double speed = down.dot(comNow - com) / c.dt;
+    com = comNow;
+    if (f == windowFrame) comWindow = comNow;
+    if (inWindow) {
+      times.push_back(f * c.dt);
+      speeds.push_back(speed);
+    }
+    for (Index i = 0; i < n; ++i) r.finite = r.finite && solver.position(i).allFinite();
+    if (trace.is_open())
+      trace << f * c.dt << ',' << normal.dot(solver.position(tracked)) << ',' << speed << ',' << meter.rms() << ','
+            << meter.contactFraction() << '\n';
+    if (!c.objDir.empty()) {
+      std::vector<Eigen::Vector3d> x(n);
+      for (Index i = 0; i < n; ++i) x[i] = solver.position(i);
+      char name[32];
+      std::snprintf(name, sizeof name, "/frame_%04d.obj", f);
+      writeObj(c.objDir + name, x, solver.asset().triangles);
+    }
+  }
+  std::vector<double> sorted = frameMs;
+  std::sort(sorted.begin(), sorted.end());
+  r.msPerFrame = sorted[sorted.size() / 2];
+  r.nsPerVertexSubstep = r.msPerFrame * 1e6 / (double(n) * c.subSteps);
+  r.tremblingRms = meter.rms();
+  r.tremblingMax = meter.max();
+  r.tremblingRmsCentred = meter.rmsCentred();
+  r.tremblingMaxCentred = meter.maxCentred();
+  r.contactFraction = meter.contactFraction();
+  if (times.size() >= 2) {  // least-squares slope of speed over time
+    double mt = 0, ms = 0;
+    for (std::size_t k = 0; k < times.size(); ++k) mt += times[k], ms += speeds[k];
+    mt /= times.size();
+    ms /= times.size();
+    double num = 0, den = 0;
+    for (std::size_t k = 0; k < times.size(); ++k) num += (times[k] - mt) * (speeds[k] - ms), den += (times[k] - mt) * (times[k] - mt);
+    r.acceleration = num / den;
+  }
+  const double windowTime = (c.frames - windowFrame) * c.dt;
+  r.creep = windowTime > 0 ? down.dot(com - comWindow) / windowTime : 0;
+  r.analyticAcceleration = std::tan(theta) > c.friction ? g * (std::sin(theta) - c.friction * std::cos(theta)) : 0;
+  const StrainStats strain = stretchStrain(solver.asset(), solver.state().x);
+  r.meanStrain = strain.mean;
+  r.maxStrain = strain.max;
+  return r;
+}
+
+}  // namespace drape::scenes
