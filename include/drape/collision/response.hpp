@@ -124,13 +124,16 @@ void projectFaceContacts(const CompiledSolid<Shape, S>& solid, S thickness, int 
 
 /// The velocity split of paper 002 (Fig 3) for every contact vertex, relative to the solid: the approaching
 /// normal velocity is removed, a separating one is damped by normalDamping, the tangential velocity is kept
-/// minus Coulomb friction. Static friction acts on positions: a tangential displacement (relative to the
-/// solid, this substep) within staticFriction times the normal correction is undone, so a cloth that should
-/// stick does not creep g sin(theta) h per substep. Kinetic friction removes at most dynamicFriction times the
-/// normal velocity change from the tangential speed.
+/// minus Coulomb friction. Friction acts on the tangential displacement of this substep (relative to the
+/// solid) against the normal position correction dn: within staticFriction * dn it is undone entirely, so a
+/// cloth that should stick does not creep g sin(theta) h per substep; beyond it, dynamicFriction * dn of it is
+/// undone. The tangential velocity loses the same amount over h, so positions and velocities agree: a slip
+/// never carries on as velocity what friction took from the position (that mismatch makes a stuck cloth
+/// crawl downhill in stick-slip waves).
 template <Scalar S>
 void respondContacts(ContactBuffer<S>& contacts, Vec3<S>* x, const Vec3<S>* xPrev, Vec3<S>* v, S h,
                      S normalDamping) {
+  const S invH = S(1) / h;
   for (const Index i : contacts.list) {
     const Vec3<S>& n = contacts.normal[i];
     const Vec3<S>& vc = contacts.solidVelocity[i];
@@ -138,20 +141,18 @@ void respondContacts(ContactBuffer<S>& contacts, Vec3<S>* x, const Vec3<S>* xPre
     const S vn = n.dot(vRel);
     Vec3<S> vt = vRel - vn * n;
     const S vnNew = vn < S(0) ? S(0) : vn * (S(1) - normalDamping);
-    const S dvn = vnNew - vn;
     const Vec3<S> disp = (x[i] - xPrev[i]) - h * vc;
     const Vec3<S> dispT = disp - n.dot(disp) * n;
-    const S stick = contacts.staticFriction[i] * contacts.correction[i];
-    if (dispT.squaredNorm() <= stick * stick) {
-      x[i] -= dispT;
-      vt.setZero();
-    } else {
-      const S speed = vt.norm();
-      const S slow = contacts.dynamicFriction[i] * std::abs(dvn);
-      vt *= speed > slow ? (speed - slow) / speed : S(0);
-    }
+    const S slip = dispT.norm();
+    const S dn = contacts.correction[i];
+    // Share of the tangential displacement friction takes back: all of it while sticking.
+    const S take = slip <= contacts.staticFriction[i] * dn
+                       ? S(1)
+                       : std::min(S(1), contacts.dynamicFriction[i] * dn / slip);
+    x[i] -= take * dispT;
+    vt -= (take * invH) * dispT;
     v[i] = vc + vnNew * n + vt;
-    contacts.normalDv[i] = std::max(dvn, S(0));
+    contacts.normalDv[i] = std::max(vnNew - vn, S(0));
   }
 }
 
