@@ -1,0 +1,31 @@
+# Configures, builds and runs the consumer project against drape, by find_package on a fresh install or by
+# add_subdirectory. Called by ctest with SOURCE, WORK and MODE.
+file(REMOVE_RECURSE ${WORK})
+if(MODE STREQUAL "find_package")
+  execute_process(COMMAND ${CMAKE_COMMAND} -S ${SOURCE} -B ${WORK}/drape-build -DDRAPE_BUILD_TESTS=OFF
+                          -DDRAPE_BUILD_SAMPLES=OFF -DDRAPE_BUILD_BENCHES=OFF -DCMAKE_INSTALL_PREFIX=${WORK}/prefix
+                  RESULT_VARIABLE rc)
+  if(rc)
+    message(FATAL_ERROR "configuring drape failed")
+  endif()
+  execute_process(COMMAND ${CMAKE_COMMAND} --install ${WORK}/drape-build RESULT_VARIABLE rc)
+  if(rc)
+    message(FATAL_ERROR "installing drape failed")
+  endif()
+  set(extra -DCMAKE_PREFIX_PATH=${WORK}/prefix)
+else()
+  set(extra -DDRAPE_SOURCE=${SOURCE})
+endif()
+execute_process(COMMAND ${CMAKE_COMMAND} -S ${SOURCE}/tests/consumer -B ${WORK}/consumer-build
+                        -DCMAKE_BUILD_TYPE=Release ${extra} RESULT_VARIABLE rc)
+if(rc)
+  message(FATAL_ERROR "configuring the consumer (${MODE}) failed")
+endif()
+execute_process(COMMAND ${CMAKE_COMMAND} --build ${WORK}/consumer-build RESULT_VARIABLE rc)
+if(rc)
+  message(FATAL_ERROR "building the consumer (${MODE}) failed")
+endif()
+execute_process(COMMAND ${WORK}/consumer-build/consumer RESULT_VARIABLE rc)
+if(rc)
+  message(FATAL_ERROR "the consumer (${MODE}) failed: ${rc}")
+endif()

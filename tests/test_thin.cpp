@@ -1,0 +1,2 @@
+#include <drape/drape.hpp>
+#include <catch2/catch.hpp>
