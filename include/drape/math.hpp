@@ -39,7 +39,8 @@ struct Pose {
 
 namespace detail {
 
-template <class Derived> bool allFinite(const Eigen::MatrixBase<Derived>& m) { return m.allFinite(); }
+/// Eigen's allFinite() computes x - x, which raises FE_INVALID on infinity; this asks each coefficient.
+template <class Derived> bool allFinite(const Eigen::MatrixBase<Derived>& m) { return m.array().isFinite().all(); }
 
 inline void require(bool ok, const std::string& what) {
   if (!ok) throw Error("drape: " + what);

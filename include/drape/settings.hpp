@@ -56,7 +56,7 @@ struct Settings {
             "subStepCount must be in [1, 10000] (got " + std::to_string(subStepCount) + ")");
     require(iterationCount >= 1 && iterationCount <= 1000,
             "iterationCount must be in [1, 1000] (got " + std::to_string(iterationCount) + ")");
-    require(gravity.allFinite(), "gravity must be finite");
+    require(detail::allFinite(gravity), "gravity must be finite");
     requireRange(stretchCompliance, 0, 1e6, "stretchCompliance");
     requireRange(shearCompliance, 0, 1e6, "shearCompliance");
     requireRange(bendingCompliance, 0, 1e6, "bendingCompliance");

@@ -11,6 +11,7 @@
 #include <drape/sdf/solid.hpp>
 #include <drape/settings.hpp>
 
+#include <limits>
 #include <memory>
 #include <tuple>
 #include <type_traits>
@@ -64,7 +65,9 @@ template <Scalar S, class... Shapes> class BasicSolver {
                     "setPositions got " + std::to_string(world.size()) + " positions for " +
                         std::to_string(vertexCount()) + " vertices");
     for (std::size_t i = 0; i < world.size(); ++i)
-      detail::require(world[i].allFinite(), "position of vertex " + std::to_string(i) + " is not finite");
+      detail::require(detail::allFinite(world[i]) && (world[i] - state_.origin).cwiseAbs().maxCoeff() <= kMaxDistance,
+                      "position of vertex " + std::to_string(i) +
+                          " is not finite or lies beyond 1e5 m of the cloth's local origin");
     for (std::size_t i = 0; i < world.size(); ++i) state_.x[i] = (world[i] - state_.origin).template cast<S>();
   }
   /// Replaces all velocities (m/s), with the same checks.
@@ -73,15 +76,18 @@ template <Scalar S, class... Shapes> class BasicSolver {
                                                           " velocities for " + std::to_string(vertexCount()) +
                                                           " vertices");
     for (std::size_t i = 0; i < v.size(); ++i)
-      detail::require(v[i].allFinite(), "velocity of vertex " + std::to_string(i) + " is not finite");
+      detail::require(detail::allFinite(v[i]) && v[i].cwiseAbs().maxCoeff() <= kMaxSpeed,
+                      "velocity of vertex " + std::to_string(i) + " is not finite or has a component beyond 1e5 m/s");
     for (std::size_t i = 0; i < v.size(); ++i) state_.v[i] = v[i].template cast<S>();
   }
   /// Sets one vertex's inverse mass (1/kg); 0 pins it where it is.
   void setInverseMass(Index i, double invMass) {
     checkVertex(i);
-    detail::require(std::isfinite(invMass) && invMass >= 0, "inverse mass of vertex " + std::to_string(i) +
-                                                                 " must be finite and >= 0 (got " +
-                                                                 std::to_string(invMass) + ")");
+    constexpr double kLargest = double(std::numeric_limits<S>::max()), kSmallest = double(std::numeric_limits<S>::min());
+    detail::require(std::isfinite(invMass) && (invMass == 0 || (invMass >= kSmallest && invMass <= kLargest)),
+                    "inverse mass of vertex " + std::to_string(i) +
+                        " must be finite, >= 0 and representable in the solver's scalar (got " +
+                        std::to_string(invMass) + ")");
     state_.invMass[i] = S(invMass);
     if (invMass == 0) state_.v[i].setZero();
   }
@@ -91,7 +97,7 @@ template <Scalar S, class... Shapes> class BasicSolver {
   /// exactly, otherwise it is pulled by a zero-length XPBD constraint. Returns the pin's index.
   Index attach(Index i, const Eigen::Vector3d& target) {
     checkVertex(i);
-    detail::require(target.allFinite(), "pin target of vertex " + std::to_string(i) + " is not finite");
+    detail::require(detail::allFinite(target), "pin target of vertex " + std::to_string(i) + " is not finite");
     pins_.push_back({i, target});
     pinLocal_.push_back({i, Vec3<S>::Zero()});
     lambdaPins_.push_back(0);
@@ -99,7 +105,7 @@ template <Scalar S, class... Shapes> class BasicSolver {
   }
   void setPinTarget(Index pin, const Eigen::Vector3d& target) {
     detail::require(pin >= 0 && pin < Index(pins_.size()), "pin index " + std::to_string(pin) + " out of range");
-    detail::require(target.allFinite(), "pin target is not finite");
+    detail::require(detail::allFinite(target), "pin target is not finite");
     pins_[pin].target = target;
   }
   const std::vector<Pin>& pins() const { return pins_; }
@@ -146,6 +152,9 @@ template <Scalar S, class... Shapes> class BasicSolver {
   template <class Observer> void step(double dt, Observer&& onSubStep) {
     detail::require(std::isfinite(dt) && dt > 0 && dt <= 10,
                     "step dt must be in (0, 10] s (got " + std::to_string(dt) + ")");
+    detail::require(dt / settings_.subStepCount >= kMinSubStep,
+                    "step dt / subStepCount must be at least 1e-6 s (got " +
+                        std::to_string(dt / settings_.subStepCount) + ")");
     rebase();
     const double h = dt / settings_.subStepCount;
     for (int sub = 0; sub < settings_.subStepCount; ++sub) {
@@ -288,6 +297,9 @@ template <Scalar S, class... Shapes> class BasicSolver {
   }
 
   static constexpr double kRebaseDistance = 0.5;  ///< m the cloth may drift from its local origin
+  static constexpr double kMaxDistance = 1e5;     ///< m, largest accepted offset from the local origin
+  static constexpr double kMaxSpeed = 1e5;        ///< m/s, largest accepted vertex speed
+  static constexpr double kMinSubStep = 1e-6;     ///< s, below this h^2 underflows float
 
   std::shared_ptr<const ClothAsset<S>> asset_;
   Settings settings_;

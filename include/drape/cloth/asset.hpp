@@ -169,9 +169,11 @@ template <Scalar S> ClothAsset<S> ClothAsset<S>::grid(const GridDesc& desc, cons
                                                     std::to_string(desc.nx) + " x " + std::to_string(desc.ny) + ")");
   detail::require(std::int64_t(desc.nx) * desc.ny <= (std::int64_t(1) << 26), "grid of " +
                       std::to_string(desc.nx) + " x " + std::to_string(desc.ny) + " vertices is too large");
-  detail::require(std::isfinite(desc.spacing) && desc.spacing > 0,
-                  "grid spacing must be positive and finite (got " + std::to_string(desc.spacing) + ")");
-  detail::require(desc.placement.position.allFinite() && desc.placement.rotation.coeffs().allFinite() &&
+  detail::require(std::isfinite(desc.spacing) && desc.spacing > 0 &&
+                      desc.spacing * std::max(desc.nx, desc.ny) <= 1e5,
+                  "grid spacing must be positive, finite and the grid at most 1e5 m across (got spacing " +
+                      std::to_string(desc.spacing) + ")");
+  detail::require(detail::allFinite(desc.placement.position) && detail::allFinite(desc.placement.rotation.coeffs()) &&
                       std::abs(desc.placement.rotation.norm() - 1.0) < 1e-6,
                   "grid placement must be finite with a unit quaternion");
   ClothAsset asset;
@@ -214,7 +216,8 @@ ClothAsset<S> ClothAsset<S>::fromMesh(const std::vector<Vec3<S>>& positions,
   const Index nv = Index(positions.size());
   require(nv >= 3 && !triangles.empty(), "a cloth mesh needs at least 3 vertices and 1 triangle");
   for (Index i = 0; i < nv; ++i)
-    require(positions[i].allFinite(), "vertex " + std::to_string(i) + " has a non-finite position");
+    require(detail::allFinite(positions[i]) && positions[i].cwiseAbs().maxCoeff() <= S(1e6),
+            "vertex " + std::to_string(i) + " has a non-finite position or one beyond 1e6 m");
   for (std::size_t f = 0; f < triangles.size(); ++f) {
     const auto& t = triangles[f];
     for (int k = 0; k < 3; ++k)

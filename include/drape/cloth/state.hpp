@@ -4,6 +4,8 @@
 
 #include <drape/cloth/asset.hpp>
 
+#include <limits>
+
 namespace drape {
 
 template <Scalar S> struct ClothState {
@@ -32,7 +34,11 @@ template <Scalar S> struct ClothState {
     s.invMass.resize(n);
     for (Index i = 0; i < n; ++i) {
       detail::require(mass[i] > 0, "vertex " + std::to_string(i) + " belongs to no face and has no mass");
-      s.invMass[i] = S(1.0 / mass[i]);
+      const double w = 1.0 / mass[i];
+      detail::require(w >= double(std::numeric_limits<S>::min()) && w <= double(std::numeric_limits<S>::max()),
+                      "the mass of vertex " + std::to_string(i) + " (" + std::to_string(mass[i]) +
+                          " kg) is outside the range of the solver's scalar; check areaDensity");
+      s.invMass[i] = S(w);
     }
     return s;
   }

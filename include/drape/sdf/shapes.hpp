@@ -109,7 +109,7 @@ inline void validateShape(const Sphere& s) {
                                                        std::to_string(s.radius) + ")");
 }
 inline void validateShape(const Box& b) {
-  require(b.halfExtents.allFinite() && (b.halfExtents.array() > 0).all(),
+  require(detail::allFinite(b.halfExtents) && (b.halfExtents.array() > 0).all(),
           "box half extents must be positive and finite");
 }
 inline void validateShape(const Capsule& c) {

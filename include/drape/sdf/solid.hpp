@@ -41,10 +41,10 @@ template <class Shape, Scalar S> struct CompiledSolid {
 namespace detail {
 
 template <class Shape> void validateSolid(const Solid<Shape>& s, const std::string& name) {
-  require(s.pose.position.allFinite() && s.pose.rotation.coeffs().allFinite() &&
+  require(detail::allFinite(s.pose.position) && detail::allFinite(s.pose.rotation.coeffs()) &&
               std::abs(s.pose.rotation.norm() - 1.0) < 1e-6,
           name + ": pose must be finite with a unit quaternion");
-  require(s.linearVelocity.allFinite() && s.angularVelocity.allFinite(), name + ": velocities must be finite");
+  require(detail::allFinite(s.linearVelocity) && detail::allFinite(s.angularVelocity), name + ": velocities must be finite");
   require(s.motion != Motion::Static || (s.linearVelocity.isZero(0) && s.angularVelocity.isZero(0)),
           name + ": a static solid must have zero velocity (make it Motion::Kinematic to move it)");
   require(std::isfinite(s.staticFriction) && s.staticFriction >= 0,
