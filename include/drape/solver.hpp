@@ -255,18 +255,21 @@ template <Scalar S, class... Shapes> class BasicSolver {
     if (!baseline) collide(h, thickness);
   }
 
+  /// The "previous method": the same vertex and face contacts, projected inside the solve pass, with
+  /// position-level friction; the velocity update then turns every projection into velocity.
   void collideBaseline(S h, S thickness) {
     Vec3<S>* x = state_.x.data();
     const S* w = state_.invMass.data();
     contacts_.begin();
     forEachCompiled([&](auto& list) {
       for (const auto& solid : list) {
-        projectVerticesBaseline(solid, thickness, h, x, xPrev_.data(), w, vertexCount(), stats_);
+        projectVertexContacts(solid, thickness, x, w, vertexCount(), contacts_, stats_);
         if constexpr (!std::decay_t<decltype(solid.sdf)>::kLinear)
           projectFaceContacts<true>(solid, thickness, settings_.pgdIterations, asset_->triangles, x, w, contacts_,
                                     stats_);
       }
     });
+    applyContactFriction(contacts_, x, xPrev_.data(), h);
   }
 
   void collide(S h, S thickness) {

@@ -7,6 +7,13 @@
 #include <algorithm>
 #include <limits>
 
+#ifndef PGD_LAMBDA
+#define PGD_LAMBDA 0
+#endif
+#ifndef PGD_GAP
+#define PGD_GAP 2e-4
+#endif
+
 namespace drape {
 
 /// Where a face is deepest in a solid.
@@ -44,48 +51,75 @@ template <Scalar S> FaceSphere<S> faceSphere(const Vec3<S>& x0, const Vec3<S>& x
   return {c, std::sqrt(r2)};
 }
 
-/// Projected gradient descent for min phi(b0 x0 + b1 x1 + b2 x2) over the simplex, started from the centroid
-/// (a corner start gets stuck on box ridges) whose value phiC and gradient gradC the caller already has from
-/// culling. d phi / d b_i = grad phi . x_i. The first step is long enough to reach any corner; later steps
-/// take the Barzilai-Borwein length, and a step that does not lower phi is halved and retried. Stops after
-/// maxIterations SDF evaluations or when b moves less than 1e-5.
+/// Kelley cutting planes for min phi(b0 x0 + b1 x1 + b2 x2) over the simplex, started from the centroid
+/// whose value phiC and gradient gradC the caller already has from culling.
 template <Scalar S, class Field>
 FaceQuery<S> deepestPointOnFace(const Field& sdf, const Vec3<S>& x0, const Vec3<S>& x1, const Vec3<S>& x2,
                                 const Vec3<S>& centroid, S phiC, const Vec3<S>& gradC, int maxIterations) {
   FaceQuery<S> q{Vec3<S>::Constant(S(1) / S(3)), centroid, gradC, phiC, 1};
-  // Only the part of the gradient along the simplex matters; removing the mean keeps the numbers small.
-  auto gradB = [&](const Vec3<S>& n) {
-    const Vec3<S> g(n.dot(x0), n.dot(x1), n.dot(x2));
-    return Vec3<S>(g.array() - g.mean());
+  constexpr int kMaxCuts = 16;
+  const Vec3<S> e1 = x1 - x0, e2 = x2 - x0;
+  const S extent = std::max({e1.norm(), e2.norm(), (x2 - x1).norm()});
+  const S tolerance = S(PGD_GAP) * extent;
+  // A cut is the tangent plane phi_k + n_k . (x - p_k), stored as its values at the three corners.
+  auto cutAt = [&](const Vec3<S>& b, S phi, const Vec3<S>& n) {
+    const S nd = n.dot(b[1] * e1 + b[2] * e2);
+    return Vec3<S>(phi - nd, phi + n.dot(e1) - nd, phi + n.dot(e2) - nd);
   };
-  Vec3<S> g = gradB(q.normal);
-  const S range = g.maxCoeff() - g.minCoeff();
-  const S extent = std::max({(x1 - x0).norm(), (x2 - x1).norm(), (x0 - x2).norm()});
-  if (!(range > S(1e-7) * extent)) return q;  // phi is flat across the face to first order
-  S eta = S(1) / range;
-  const S etaMax = S(1e4) / std::max(extent, std::numeric_limits<S>::min());
-  constexpr S kStepTolerance = S(1e-5);
-  while (q.evaluations < maxIterations) {
-    // A move longer than 2 in b crosses the whole simplex: clamp it, so the projection stays well-conditioned.
-    Vec3<S> move = eta * g;
-    const S longest = move.cwiseAbs().maxCoeff();
-    if (longest > S(2)) move *= S(2) / longest;
-    const Vec3<S> b = projectToSimplex<S>(q.barycentric - move);
-    const Vec3<S> s = b - q.barycentric;
-    if (s.cwiseAbs().maxCoeff() < kStepTolerance) break;
-    const Vec3<S> p = b[0] * x0 + b[1] * x1 + b[2] * x2;
+  Vec3<S> cuts[kMaxCuts];
+  int count = 1;
+  cuts[0] = cutAt(q.barycentric, phiC, gradC);
+  Index corner = 0;
+  S model = cuts[0].minCoeff(&corner);
+  Vec3<S> next = Vec3<S>::Unit(corner);
+  S lower = model;
+  bool exact = true;
+  Vec3<S> poly[kMaxCuts + 3], clipped[kMaxCuts + 3];
+  while (q.evaluations < maxIterations && q.phi - lower > tolerance) {
+    const Vec3<S> b = next / next.sum();
+    const Vec3<S> p = x0 + b[1] * e1 + b[2] * e2;
     Vec3<S> n;
     const S phi = sdf(p, n);
     ++q.evaluations;
-    if (phi < q.phi) {
-      const Vec3<S> gNew = gradB(n);
-      const S sy = s.dot(gNew - g);
-      eta = sy > S(0) ? std::min(s.squaredNorm() / sy, etaMax) : std::min(eta * S(2), etaMax);
-      q = {b, p, n, phi, q.evaluations};
-      g = gNew;
-    } else {
-      eta *= S(0.5);
+    if (phi < q.phi) q = {b, p, n, phi, q.evaluations};
+    if (q.phi - lower <= tolerance) break;
+    const Vec3<S> c = cutAt(b, phi, n);
+    if (count == kMaxCuts) {  // keep the cuts active at the model's minimum: it stays the minimum
+      int kept = 0;
+      const S slack = S(1e-4) * tolerance;
+      for (int k = 0; k < count; ++k)
+        if (cuts[k].dot(b) >= model - slack && kept < kMaxCuts - 1) cuts[kept++] = cuts[k];
+      if (kept == kMaxCuts - 1) exact = false;
+      count = kept;
     }
+    // The model's new minimum lies on the new cut (the old minimum violates it): minimise the new cut over
+    // the part of the triangle where it is the highest.
+    int vertices = 3;
+    for (int k = 0; k < 3; ++k) poly[k] = Vec3<S>::Unit(k);
+    for (int k = 0; k < count && vertices > 0; ++k) {
+      const Vec3<S> h = c - cuts[k];
+      int out = 0;
+      for (int i = 0; i < vertices; ++i) {
+        const Vec3<S>& u = poly[i];
+        const Vec3<S>& v = poly[(i + 1) % vertices];
+        const S su = h.dot(u), sv = h.dot(v);
+        if (su >= S(0)) clipped[out++] = u;
+        if ((su >= S(0)) != (sv >= S(0))) clipped[out++] = u + (su / (su - sv)) * (v - u);
+      }
+      vertices = out;
+      std::copy(clipped, clipped + out, poly);
+    }
+    if (vertices == 0) break;
+    cuts[count++] = c;
+    int arg = 0;
+    model = c.dot(poly[0]);
+    for (int i = 1; i < vertices; ++i) {
+      const S m = c.dot(poly[i]);
+      if (m < model) model = m, arg = i;
+    }
+    next = poly[arg].cwiseMax(S(0));
+    if (PGD_LAMBDA > 0) next += S(PGD_LAMBDA) * (q.barycentric - next / next.sum());
+    if (exact) lower = std::max(lower, model);
   }
   return q;
 }

@@ -7,21 +7,34 @@
 #include <drape/collision/pgd.hpp>
 #include <drape/sdf/solid.hpp>
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
 namespace drape {
 
-/// Per-vertex contact records of one substep. A record is live when stamp[i] == current, so nothing is
-/// cleared per substep; `list` holds the live vertices in the order they were first touched.
+/// One solid surface a vertex touches in a substep.
+template <Scalar S> struct ContactSlot {
+  Vec3<S> normal;         ///< outward normal of the solid at the contact
+  Vec3<S> solidVelocity;  ///< v_c at the vertex
+  S correction;           ///< normal position correction along this normal this substep (m)
+  S staticFriction, dynamicFriction;
+};
+
+/// Per-vertex contact records of one substep. A vertex may touch up to kSlots differently-facing surfaces
+/// (two planes of a crease, the faces of a box corner), each answered along its own normal: answering only
+/// one leaves the velocity into the others in place, which then grows without bound. Contacts whose normals
+/// agree within kMergeCos share a slot. A record is live when stamp[i] == current, so nothing is cleared per
+/// substep; `list` holds the live vertices in the order they were first touched.
 template <Scalar S> struct ContactBuffer {
+  static constexpr int kSlots = 3;
+  static constexpr S kMergeCos = S(0.95);
+
   std::vector<std::uint32_t> stamp;
   std::uint32_t current = 0;
   std::vector<Index> list;
-  std::vector<Vec3<S>> normal;         ///< outward normal of the solid at the contact
-  std::vector<Vec3<S>> solidVelocity;  ///< v_c at the vertex
-  std::vector<S> correction;           ///< normal position correction this substep (m)
-  std::vector<S> staticFriction, dynamicFriction;
+  std::vector<std::array<ContactSlot<S>, kSlots>> slots;
+  std::vector<std::uint8_t> slotCount;
   std::vector<S> normalDv;  ///< normal velocity change the response made (m/s), the source of propagation
 
   void resize(Index n) {
@@ -29,11 +42,8 @@ template <Scalar S> struct ContactBuffer {
     current = 0;
     list.clear();
     list.reserve(n);
-    normal.resize(n);
-    solidVelocity.resize(n);
-    correction.resize(n);
-    staticFriction.resize(n);
-    dynamicFriction.resize(n);
+    slots.resize(n);
+    slotCount.assign(n, 0);
     normalDv.resize(n);
   }
   void begin() {
@@ -44,18 +54,39 @@ template <Scalar S> struct ContactBuffer {
     }
   }
   bool live(Index i) const { return stamp[i] == current; }
+  /// The first surface the vertex touched this substep.
+  const Vec3<S>& normal(Index i) const { return slots[i][0].normal; }
+  const Vec3<S>& solidVelocity(Index i) const { return slots[i][0].solidVelocity; }
+  /// Total normal position correction this substep (m).
+  S correction(Index i) const {
+    S sum = 0;
+    for (int k = 0; k < slotCount[i]; ++k) sum += slots[i][k].correction;
+    return sum;
+  }
+
   void record(Index i, const Vec3<S>& n, const Vec3<S>& vc, S dn, const SolidMotion<S>& m) {
     if (stamp[i] != current) {
       stamp[i] = current;
       list.push_back(i);  // capacity is the vertex count: never allocates
-      correction[i] = dn;
-    } else {
-      correction[i] += dn;
+      slotCount[i] = 0;
     }
-    normal[i] = n;
-    solidVelocity[i] = vc;
-    staticFriction[i] = m.staticFriction;
-    dynamicFriction[i] = m.dynamicFriction;
+    auto& own = slots[i];
+    int best = -1;
+    S bestCos = kMergeCos;
+    for (int k = 0; k < slotCount[i]; ++k) {
+      const S c = own[k].normal.dot(n);
+      if (c >= bestCos) best = k, bestCos = c;
+    }
+    if (best < 0 && slotCount[i] < kSlots) {
+      own[slotCount[i]++] = {n, vc, dn, m.staticFriction, m.dynamicFriction};
+      return;
+    }
+    if (best < 0) {  // all slots taken by other directions: join the closest
+      bestCos = -2;
+      for (int k = 0; k < kSlots; ++k)
+        if (own[k].normal.dot(n) > bestCos) best = k, bestCos = own[k].normal.dot(n);
+    }
+    own[best] = {n, vc, own[best].correction + dn, m.staticFriction, m.dynamicFriction};
   }
 };
 
@@ -122,38 +153,59 @@ void projectFaceContacts(const CompiledSolid<Shape, S>& solid, S thickness, int 
   stats.facesTested += Index(triangles.size());
 }
 
-/// The velocity split of paper 002 (Fig 3) for every contact vertex, relative to the solid: the approaching
-/// normal velocity is removed, a separating one is damped by normalDamping, the tangential velocity is kept
-/// minus Coulomb friction. Friction acts on the tangential displacement of this substep (relative to the
-/// solid) against the normal position correction dn: within staticFriction * dn it is undone entirely, so a
-/// cloth that should stick does not creep g sin(theta) h per substep; beyond it, dynamicFriction * dn of it is
-/// undone. The tangential velocity loses the same amount over h, so positions and velocities agree: a slip
-/// never carries on as velocity what friction took from the position (that mismatch makes a stuck cloth
-/// crawl downhill in stick-slip waves).
+/// Coulomb friction on positions for one contact surface: the tangential displacement of this substep
+/// (relative to the solid) within staticFriction * dn is undone entirely (stick, returns true); beyond it,
+/// dynamicFriction * dn of it is undone. So a cloth that should stick does not creep g sin(theta) h per substep.
+template <Scalar S> bool applyPositionFriction(const ContactSlot<S>& c, Vec3<S>& x, const Vec3<S>& xPrev, S h) {
+  const Vec3<S>& n = c.normal;
+  const Vec3<S> disp = (x - xPrev) - h * c.solidVelocity;
+  const Vec3<S> dispT = disp - n.dot(disp) * n;
+  const S slip = dispT.norm();
+  if (slip <= c.staticFriction * c.correction) {
+    x -= dispT;
+    return true;
+  }
+  x -= std::min(S(1), c.dynamicFriction * c.correction / slip) * dispT;
+  return false;
+}
+
+/// The velocity split of paper 002 (Fig 3) for every contact vertex and each surface it touches, relative
+/// to that solid: the approaching normal velocity is removed, a separating one is damped by normalDamping, the
+/// tangential velocity is kept minus Coulomb friction. Friction acts on positions (applyPositionFriction); a
+/// stuck vertex keeps no tangential velocity, a sliding one loses dynamicFriction * dn / h of its tangential
+/// speed, the same as its position lost, so a slip never carries on as velocity what friction took from the
+/// position (that mismatch makes a stuck cloth crawl downhill in stick-slip waves).
 template <Scalar S>
 void respondContacts(ContactBuffer<S>& contacts, Vec3<S>* x, const Vec3<S>* xPrev, Vec3<S>* v, S h,
                      S normalDamping) {
   const S invH = S(1) / h;
   for (const Index i : contacts.list) {
-    const Vec3<S>& n = contacts.normal[i];
-    const Vec3<S>& vc = contacts.solidVelocity[i];
-    const Vec3<S> vRel = v[i] - vc;
-    const S vn = n.dot(vRel);
-    Vec3<S> vt = vRel - vn * n;
-    const S vnNew = vn < S(0) ? S(0) : vn * (S(1) - normalDamping);
-    const Vec3<S> disp = (x[i] - xPrev[i]) - h * vc;
-    const Vec3<S> dispT = disp - n.dot(disp) * n;
-    const S slip = dispT.norm();
-    const S dn = contacts.correction[i];
-    // Share of the tangential displacement friction takes back: all of it while sticking.
-    const S take = slip <= contacts.staticFriction[i] * dn
-                       ? S(1)
-                       : std::min(S(1), contacts.dynamicFriction[i] * dn / slip);
-    x[i] -= take * dispT;
-    vt -= (take * invH) * dispT;
-    v[i] = vc + vnNew * n + vt;
-    contacts.normalDv[i] = std::max(vnNew - vn, S(0));
+    S dvnSum = 0;
+    for (int k = 0; k < contacts.slotCount[i]; ++k) {
+      const ContactSlot<S>& c = contacts.slots[i][k];
+      const Vec3<S>& n = c.normal;
+      const Vec3<S> vRel = v[i] - c.solidVelocity;
+      const S vn = n.dot(vRel);
+      Vec3<S> vt = vRel - vn * n;
+      const S vnNew = vn < S(0) ? S(0) : vn * (S(1) - normalDamping);
+      if (applyPositionFriction(c, x[i], xPrev[i], h)) {
+        vt.setZero();
+      } else {
+        const S speed = vt.norm();
+        const S slow = c.dynamicFriction * c.correction * invH;
+        vt *= speed > slow ? (speed - slow) / speed : S(0);
+      }
+      v[i] = c.solidVelocity + vnNew * n + vt;
+      dvnSum += std::max(vnNew - vn, S(0));
+    }
+    contacts.normalDv[i] = dvnSum;
   }
+}
+
+/// Baseline friction: position-level Coulomb friction for every contact of the current solve pass.
+template <Scalar S> void applyContactFriction(const ContactBuffer<S>& contacts, Vec3<S>* x, const Vec3<S>* xPrev, S h) {
+  for (const Index i : contacts.list)
+    for (int k = 0; k < contacts.slotCount[i]; ++k) applyPositionFriction(contacts.slots[i][k], x[i], xPrev[i], h);
 }
 
 /// Scratch for propagation rings.
@@ -191,8 +243,8 @@ void propagateCorrections(const ContactBuffer<S>& contacts, PropagationBuffer<S>
     for (const Index i : buf.sources) {
       if (buf.amount[i] <= S(0)) continue;
       const bool fromContact = ring == 0;
-      const Vec3<S>& n = fromContact ? contacts.normal[i] : buf.normalSum[i];
-      const Vec3<S>& vc = fromContact ? contacts.solidVelocity[i] : buf.velocitySum[i];
+      const Vec3<S>& n = fromContact ? contacts.normal(i) : buf.normalSum[i];
+      const Vec3<S>& vc = fromContact ? contacts.solidVelocity(i) : buf.velocitySum[i];
       for (const Index* it = neighbours.begin(i); it != neighbours.end(i); ++it) {
         const Index j = *it;
         if (contacts.stamp[j] == mark || invMass[j] == S(0)) continue;
@@ -233,29 +285,6 @@ void propagateCorrections(const ContactBuffer<S>& contacts, PropagationBuffer<S>
     }
     buf.sources.swap(buf.next);
   }
-}
-
-/// Baseline (the "previous method"): inside the constraint solve, push free vertices out to the thickness,
-/// with position-level Coulomb friction (Mueller et al. 2007). The velocity later comes from positions.
-template <class Shape, Scalar S>
-void projectVerticesBaseline(const CompiledSolid<Shape, S>& solid, S thickness, S h, Vec3<S>* x,
-                             const Vec3<S>* xPrev, const S* invMass, Index vertexCount, CollisionStats& stats) {
-  for (Index i = 0; i < vertexCount; ++i) {
-    Vec3<S> n;
-    const S phi = solid.sdf(x[i], n);
-    if (phi >= thickness || invMass[i] == S(0)) continue;
-    const S dn = thickness - phi;
-    x[i] += dn * n;
-    const Vec3<S> disp = (x[i] - xPrev[i]) - h * solid.motion.velocityAt(x[i]);
-    const Vec3<S> dispT = disp - n.dot(disp) * n;
-    const S len = dispT.norm();
-    if (len <= solid.motion.staticFriction * dn)
-      x[i] -= dispT;
-    else if (len > S(0))
-      x[i] -= std::min(S(1), solid.motion.dynamicFriction * dn / len) * dispT;
-    ++stats.vertexContacts;
-  }
-  stats.sdfEvaluations += vertexCount;
 }
 
 }  // namespace drape
