@@ -1,2 +1,417 @@
+// The deepest-point search (projectToSimplex, deepestPointOnFace) against brute force, and bounding-sphere
+// culling: exact per face, and invisible at the solver level.
+
 #include <drape/drape.hpp>
+
 #include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <limits>
+#include <memory>
+#include <numbers>
+#include <random>
+#include <string>
+#include <vector>
+
+namespace {
+
+using drape::Vec3;
+using V3 = Eigen::Vector3d;
+
+// ------------------------------------------------------------------------------------------------------------
+// Helpers
+
+double uniform(std::mt19937& rng, double lo, double hi) { return std::uniform_real_distribution<double>(lo, hi)(rng); }
+
+V3 randomUnit(std::mt19937& rng) {
+  std::normal_distribution<double> n(0, 1);
+  for (;;) {
+    const V3 v(n(rng), n(rng), n(rng));
+    const double len = v.norm();
+    if (len > 1e-6) return v / len;
+  }
+}
+
+/// A point uniformly inside the ball of the given radius.
+V3 randomInBall(std::mt19937& rng, double radius) {
+  for (;;) {
+    const V3 v(uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, -1, 1));
+    if (v.squaredNorm() <= 1) return radius * v;
+  }
+}
+
+Eigen::Quaterniond randomRotation(std::mt19937& rng) {
+  std::normal_distribution<double> n(0, 1);
+  Eigen::Quaterniond q(n(rng), n(rng), n(rng), n(rng));
+  q.normalize();
+  return q;
+}
+
+/// A world-space triangle (double).
+struct Tri {
+  std::array<V3, 3> x;
+  double meanEdge() const { return ((x[1] - x[0]).norm() + (x[2] - x[1]).norm() + (x[0] - x[2]).norm()) / 3; }
+};
+
+/// A roughly equilateral triangle of edge about `edge`, centred on `centre`, randomly turned and skewed.
+Tri randomTriangle(std::mt19937& rng, const V3& centre, double edge) {
+  const V3 n = randomUnit(rng);
+  const V3 u = n.unitOrthogonal();
+  const V3 v = n.cross(u);
+  const double r = edge / std::sqrt(3.0);
+  const double a0 = uniform(rng, 0, 2 * std::numbers::pi);
+  Tri t;
+  for (int k = 0; k < 3; ++k) {
+    const double a = a0 + k * 2 * std::numbers::pi / 3 + uniform(rng, -0.35, 0.35);
+    const double rk = r * uniform(rng, 0.8, 1.2);
+    t.x[k] = centre + rk * (std::cos(a) * u + std::sin(a) * v);
+  }
+  return t;
+}
+
+template <class S> std::array<Vec3<S>, 3> toLocal(const Tri& t, const V3& origin) {
+  return {(t.x[0] - origin).cast<S>(), (t.x[1] - origin).cast<S>(), (t.x[2] - origin).cast<S>()};
+}
+
+/// The smallest phi over a dense barycentric grid of the face (`n` subdivisions per side, vertices included).
+template <class S, class Field> S bruteMinimum(const Field& sdf, const std::array<Vec3<S>, 3>& x, int n) {
+  S best = std::numeric_limits<S>::infinity();
+  Vec3<S> g;
+  for (int i = 0; i <= n; ++i)
+    for (int j = 0; j <= n - i; ++j) {
+      const S b0 = S(i) / S(n), b1 = S(j) / S(n), b2 = S(n - i - j) / S(n);
+      best = std::min(best, sdf(Vec3<S>(b0 * x[0] + b1 * x[1] + b2 * x[2]), g));
+    }
+  return best;
+}
+
+/// deepestPointOnFace called exactly as projectFaceContacts calls it.
+template <class S, class Field>
+drape::FaceQuery<S> pgdQuery(const Field& sdf, const std::array<Vec3<S>, 3>& x, int iterations) {
+  const drape::FaceSphere<S> sphere = drape::faceSphere<S>(x[0], x[1], x[2]);
+  Vec3<S> gradC;
+  const S phiC = sdf(sphere.centre, gradC);
+  return drape::deepestPointOnFace<S>(sdf, x[0], x[1], x[2], sphere.centre, phiC, gradC, iterations);
+}
+
+// ------------------------------------------------------------------------------------------------------------
+// Scenarios: a solid and a way to place triangles on its features.
+
+struct Scenario {
+  std::string name;
+  /// Makes one random (world) triangle near the solid's feature of interest.
+  std::function<Tri(std::mt19937&, double /*reach*/)> triangle;
+};
+
+constexpr double kEdge = 0.02;  // cloth spacing (m)
+
+/// Where every scenario's solid sits: far from the world origin, so the compile-relative-to-origin path is used.
+const V3 kWorld(312.5, -47.25, 8.0);
+/// The local origin the solids are compiled against (as the solver's would be, near the cloth).
+const V3 kOrigin(312.5, -47.25, 8.0 - 1.0 / 64);
+
+/// A point on the boundary of a box (half extents h) in its own frame: on one of its 12 edges, or at a corner.
+V3 boxEdgePoint(std::mt19937& rng, const V3& h, bool corner) {
+  V3 p;
+  for (int k = 0; k < 3; ++k) p[k] = (rng() & 1u) ? h[k] : -h[k];
+  if (!corner) {
+    const int axis = int(rng() % 3u);
+    p[axis] = uniform(rng, -h[axis], h[axis]);
+  }
+  return p;
+}
+
+/// Applies f(name, sdf, makeTriangle) to every scenario's compiled field in scalar S.
+template <class S, class F> void forEachScenario(std::mt19937& rng, F&& f) {
+  using namespace drape;
+  // Planes, several orientations.
+  for (int k = 0; k < 4; ++k) {
+    Pose pose{randomRotation(rng), kWorld + randomInBall(rng, 0.2)};
+    const auto sdf = detail::compileSdf<S>(Plane{}, pose, kOrigin);
+    const V3 n = pose.rotation * V3::UnitZ();
+    f("plane " + std::to_string(k), sdf, [=](std::mt19937& r, double reach) {
+      const V3 onPlane = pose.position + pose.rotation * V3(uniform(r, -0.3, 0.3), uniform(r, -0.3, 0.3), 0);
+      return randomTriangle(r, onPlane + uniform(r, -reach, reach) * n, kEdge);
+    });
+  }
+  // Spheres: a large one, and one smaller than a face.
+  for (const double radius : {0.3, 0.005}) {
+    Pose pose{randomRotation(rng), kWorld + randomInBall(rng, 0.2)};
+    const auto sdf = detail::compileSdf<S>(Sphere{radius}, pose, kOrigin);
+    f("sphere r=" + std::to_string(radius), sdf, [=](std::mt19937& r, double reach) {
+      const V3 c = radius > kEdge ? V3(pose.position + (radius + uniform(r, -reach, reach)) * randomUnit(r))
+                                  : V3(pose.position + randomInBall(r, radius + reach));
+      return randomTriangle(r, c, kEdge);
+    });
+  }
+  // Boxes: corners and ridges of a cube, and of thin plates.
+  for (const V3& h : {V3(0.1, 0.1, 0.1), V3(0.1, 0.07, 0.004), V3(0.004, 0.004, 0.1)}) {
+    for (const bool corner : {true, false}) {
+      Pose pose{randomRotation(rng), kWorld + randomInBall(rng, 0.2)};
+      const auto sdf = detail::compileSdf<S>(Box{h}, pose, kOrigin);
+      char name[96];
+      std::snprintf(name, sizeof name, "box %.3gx%.3gx%.3g %s", h[0], h[1], h[2], corner ? "corner" : "ridge");
+      f(name, sdf, [=](std::mt19937& r, double reach) {
+        const V3 p = boxEdgePoint(r, h, corner) + randomInBall(r, reach);
+        return randomTriangle(r, pose.apply(p), kEdge);
+      });
+    }
+  }
+  // A thin capsule (a rod thinner than a face), around its side and its caps.
+  {
+    const Capsule cap{0.003, 0.1};
+    Pose pose{randomRotation(rng), kWorld + randomInBall(rng, 0.2)};
+    const auto sdf = detail::compileSdf<S>(cap, pose, kOrigin);
+    f("capsule r=0.003", sdf, [=](std::mt19937& r, double reach) {
+      const V3 onAxis(0, 0, uniform(r, -cap.halfHeight - 0.01, cap.halfHeight + 0.01));
+      return randomTriangle(r, pose.apply(onAxis + randomInBall(r, cap.radius + reach)), kEdge);
+    });
+  }
+}
+
+// ------------------------------------------------------------------------------------------------------------
+// Exact projection onto the triangle simplex by enumerating its faces (interior, edges, vertices).
+
+Eigen::Vector3d exactProjection(const Eigen::Vector3d& y) {
+  Eigen::Vector3d best = Eigen::Vector3d::Zero();
+  double bestD = std::numeric_limits<double>::infinity();
+  auto consider = [&](const Eigen::Vector3d& b) {
+    if ((b.array() < 0).any()) return;
+    const double d = (b - y).squaredNorm();
+    if (d < bestD) bestD = d, best = b;
+  };
+  consider((y.array() + (1 - y.sum()) / 3).matrix());  // interior: shift along (1,1,1)
+  for (int z = 0; z < 3; ++z) {                          // edge b_z = 0
+    const int i = (z + 1) % 3, j = (z + 2) % 3;
+    Eigen::Vector3d b = Eigen::Vector3d::Zero();
+    const double s = (1 - y[i] - y[j]) / 2;
+    b[i] = y[i] + s;
+    b[j] = y[j] + s;
+    consider(b);
+  }
+  for (int k = 0; k < 3; ++k) consider(Eigen::Vector3d::Unit(k));
+  return best;
+}
+
+}  // namespace
+
+// ============================================================================================================
+// 1. projectToSimplex
+
+TEMPLATE_TEST_CASE("projectToSimplex returns the nearest point of the simplex", "[pgd]", float, double) {
+  using S = TestType;
+  std::mt19937 rng(20240611);
+  std::normal_distribution<double> normal(0, 1);
+  constexpr S eps = std::numeric_limits<S>::epsilon();
+  constexpr int kGrid = 200;
+
+  // Kinds of input: near the simplex, offset by +-1e3, huge spread between coordinates, ties, and corner cases.
+  std::vector<Eigen::Vector3d> inputs;
+  for (int k = 0; k < 300; ++k) inputs.push_back(Eigen::Vector3d(normal(rng), normal(rng), normal(rng)));
+  for (int k = 0; k < 150; ++k)
+    inputs.push_back(Eigen::Vector3d(normal(rng), normal(rng), normal(rng)) + Eigen::Vector3d::Constant(1e3));
+  for (int k = 0; k < 150; ++k)
+    inputs.push_back(Eigen::Vector3d(normal(rng), normal(rng), normal(rng)) - Eigen::Vector3d::Constant(1e3));
+  for (int k = 0; k < 300; ++k) {
+    Eigen::Vector3d y;
+    for (int i = 0; i < 3; ++i) y[i] = ((rng() & 1u) ? 1 : -1) * std::pow(10.0, uniform(rng, -4, 6));
+    inputs.push_back(y);
+  }
+  inputs.push_back(Eigen::Vector3d(1.0 / 3, 1.0 / 3, 1.0 / 3));
+  inputs.push_back(Eigen::Vector3d(0, 0, 0));
+  inputs.push_back(Eigen::Vector3d(5, 5, 5));
+  inputs.push_back(Eigen::Vector3d(-5, -5, -5));
+  inputs.push_back(Eigen::Vector3d(1, 0, 0));
+  inputs.push_back(Eigen::Vector3d(2, 2, -7));
+  inputs.push_back(Eigen::Vector3d(1e6, 1e6 + 1, -1e6));
+
+  // The barycentric grid, once.
+  std::vector<Eigen::Vector3d> grid;
+  for (int i = 0; i <= kGrid; ++i)
+    for (int j = 0; j <= kGrid - i; ++j)
+      grid.push_back(Eigen::Vector3d(double(i) / kGrid, double(j) / kGrid, double(kGrid - i - j) / kGrid));
+
+  for (const Eigen::Vector3d& yd : inputs) {
+    const Vec3<S> y = yd.cast<S>();
+    const Eigen::Vector3d yIn = y.template cast<double>();  // what the projection actually saw
+    const Vec3<S> b = drape::projectToSimplex<S>(y);
+    const Eigen::Vector3d bd = b.template cast<double>();
+    // Rounding in y - theta is relative to the largest magnitude involved.
+    const double scale = 1 + yIn.cwiseAbs().maxCoeff();
+    const double tol = 16 * double(eps) * scale;
+    INFO("y = " << yIn.transpose() << ", b = " << bd.transpose());
+    REQUIRE(b.allFinite());
+    REQUIRE((b.array() >= S(0)).all());
+    REQUIRE(std::abs(bd.sum() - 1) <= tol);
+
+    double gridBest = std::numeric_limits<double>::infinity();
+    for (const auto& g : grid) gridBest = std::min(gridBest, (g - yIn).norm());
+    const double dProj = (bd - yIn).norm();
+    INFO("projection distance " << dProj << ", grid best " << gridBest);
+    REQUIRE(dProj <= gridBest + tol);
+    // And it matches the exact projection found by enumerating the simplex's faces.
+    REQUIRE((bd - exactProjection(yIn)).cwiseAbs().maxCoeff() <= tol);
+  }
+}
+
+// ============================================================================================================
+// 2. PGD accuracy
+
+TEMPLATE_TEST_CASE("PGD finds a face's deepest point within 1e-3 edge of brute force", "[pgd]", float, double) {
+  using S = TestType;
+  const int iterations = drape::Settings{}.pgdIterations;
+  constexpr int kTriangles = 250;
+  constexpr int kGrid = 200;
+  std::mt19937 rng(77);
+  long long total = 0, totalEvaluations = 0;
+  forEachScenario<S>(rng, [&](const std::string& name, const auto& sdf, const auto& makeTriangle) {
+    long long evaluations = 0, beaten = 0, misses = 0;
+    double worst = -std::numeric_limits<double>::infinity();
+    for (int k = 0; k < kTriangles; ++k) {
+      // Mostly touching or crossing the feature; some a little off it.
+      const Tri tri = makeTriangle(rng, k % 5 == 0 ? 0.02 : 0.008);
+      const auto x = toLocal<S>(tri, kOrigin);
+      const drape::FaceQuery<S> q = pgdQuery<S>(sdf, x, iterations);
+      const S brute = bruteMinimum<S>(sdf, x, kGrid);
+      const double edge = tri.meanEdge();
+      const double excess = (double(q.phi) - double(brute)) / edge;
+      worst = std::max(worst, excess);
+      evaluations += q.evaluations;
+      if (q.phi < brute) ++beaten;
+      if (double(q.phi) > double(brute) + 1e-3 * edge) ++misses;
+      INFO(name << " triangle " << k << ": pgd " << q.phi << " (b = " << q.barycentric.transpose() << ", "
+                << q.evaluations << " evaluations), brute " << brute << ", edge " << edge);
+      CHECK(q.evaluations <= iterations);
+      CHECK(q.barycentric.allFinite());
+      CHECK((q.barycentric.array() >= S(0)).all());
+      CHECK(std::abs(double(q.barycentric.sum()) - 1) <= 1e-5);
+      // The reported point and value are the field at the reported barycentric point.
+      const Vec3<S> p = q.barycentric[0] * x[0] + q.barycentric[1] * x[1] + q.barycentric[2] * x[2];
+      CHECK((q.point - p).norm() <= S(1e-5) * S(edge));
+      Vec3<S> g;
+      CHECK(std::abs(double(sdf(q.point, g) - q.phi)) <= 1e-6);
+      CHECK(double(q.phi) <= double(brute) + 1e-3 * edge);
+    }
+    const double mean = double(evaluations) / kTriangles;
+    std::printf("[pgd] %-6s %-28s mean evaluations %.2f, worst (pgd - brute) / edge %+.2e, beat grid %lld, missed %lld of %d\n",
+                sizeof(S) == 4 ? "float" : "double", name.c_str(), mean, worst, beaten, misses, kTriangles);
+    total += kTriangles;
+    totalEvaluations += evaluations;
+  });
+  std::printf("[pgd] %-6s all shapes: mean evaluations %.2f (budget %d)\n", sizeof(S) == 4 ? "float" : "double",
+              double(totalEvaluations) / double(total), iterations);
+}
+
+// ============================================================================================================
+// 3. Culling
+
+TEMPLATE_TEST_CASE("bounding-sphere culling never rejects a face within the thickness", "[culling]", float, double) {
+  using S = TestType;
+  const S thickness = S(drape::Settings{}.thickness);
+  constexpr int kTriangles = 300;
+  constexpr int kGrid = 100;
+  std::mt19937 rng(4242);
+  forEachScenario<S>(rng, [&](const std::string& name, const auto& sdf, const auto& makeTriangle) {
+    int culled = 0, kept = 0;
+    double tightest = std::numeric_limits<double>::infinity();
+    for (int k = 0; k < kTriangles; ++k) {
+      const Tri tri = makeTriangle(rng, 0.03);
+      const auto x = toLocal<S>(tri, kOrigin);
+      const drape::FaceSphere<S> sphere = drape::faceSphere<S>(x[0], x[1], x[2]);
+      // The sphere holds the face.
+      for (const auto& v : x) REQUIRE((v - sphere.centre).norm() <= sphere.radius * (1 + S(1e-5)));
+      Vec3<S> gradC;
+      const S phiC = sdf(sphere.centre, gradC);
+      if (!(phiC > sphere.radius + thickness)) {
+        ++kept;
+        continue;
+      }
+      ++culled;
+      const S brute = bruteMinimum<S>(sdf, x, kGrid);
+      tightest = std::min(tightest, double(brute - thickness));
+      INFO(name << " triangle " << k << ": phi(centre) " << phiC << ", radius " << sphere.radius << ", brute "
+                << brute);
+      REQUIRE(brute > thickness);
+    }
+    std::printf("[culling] %-6s %-28s culled %d, kept %d, closest culled face %.2e m beyond the thickness\n",
+                sizeof(S) == 4 ? "float" : "double", name.c_str(), culled, kept, tightest);
+    CHECK(culled > 0);
+    CHECK(kept > 0);
+  });
+}
+
+namespace {
+
+struct Run {
+  std::vector<Eigen::Vector3d> positions;
+  std::vector<std::vector<drape::Index>> contactLists;  // after every substep
+  std::vector<drape::Index> lastContacts;
+  std::vector<Eigen::Vector3d> lastNormals;
+  std::int64_t culledInAir = 0;
+  std::int64_t faceContacts = 0;
+};
+
+Run dropOnSphereAndBox(bool culling, int frames) {
+  using namespace drape;
+  GridDesc grid;
+  grid.nx = 20;
+  grid.ny = 20;
+  grid.spacing = 0.02;
+  grid.placement.position = V3(0.01, 0.02, 0.12);
+  auto asset = std::make_shared<const ClothAsset<double>>(ClothAsset<double>::grid(grid));
+  Settings settings;
+  settings.culling = culling;
+  Solver<double> solver(asset, settings);
+  Solid<Sphere> ball;
+  ball.shape.radius = 0.08;
+  ball.pose.position = V3(-0.09, 0, 0);
+  ball.staticFriction = ball.dynamicFriction = 0.3;
+  solver.addSolid(ball);
+  Solid<Box> box;
+  box.shape.halfExtents = V3(0.06, 0.05, 0.04);
+  box.pose.position = V3(0.1, 0.03, 0.02);
+  box.pose.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(0.6, V3(0.3, 1, 0.2).normalized()));
+  box.staticFriction = box.dynamicFriction = 0.3;
+  solver.addSolid(box);
+
+  Run run;
+  for (int f = 0; f < frames; ++f) {
+    solver.step(1.0 / 60.0, [&](const Solver<double>& s) {
+      run.contactLists.push_back(s.contacts().list);
+      run.faceContacts += s.stats().faceContacts;
+      if (f == 0) run.culledInAir += s.stats().facesCulled;
+    });
+  }
+  for (Index i = 0; i < solver.vertexCount(); ++i) run.positions.push_back(solver.position(i));
+  run.lastContacts = solver.contacts().list;
+  for (const Index i : run.lastContacts) run.lastNormals.push_back(solver.contacts().normal(i));
+  return run;
+}
+
+}  // namespace
+
+TEST_CASE("culling changes nothing in a simulation: positions and contacts are bit-identical", "[culling]") {
+  constexpr int kFrames = 60;
+  const Run with = dropOnSphereAndBox(true, kFrames);
+  const Run without = dropOnSphereAndBox(false, kFrames);
+  // The scene is meaningful: the cloth starts in the air (so faces are culled) and lands on both solids.
+  CHECK(with.culledInAir > 0);
+  CHECK(without.culledInAir == 0);
+  CHECK(with.faceContacts > 0);
+  CHECK_FALSE(with.lastContacts.empty());
+  std::printf("[culling] solver: %lld faces culled in the first frame, %zu contacts at the end, %lld face contacts\n",
+              (long long)with.culledInAir, with.lastContacts.size(), (long long)with.faceContacts);
+
+  REQUIRE(with.positions.size() == without.positions.size());
+  std::size_t differing = 0;
+  for (std::size_t i = 0; i < with.positions.size(); ++i)
+    if (with.positions[i] != without.positions[i]) ++differing;  // exact comparison: bit-identical
+  CHECK(differing == 0);
+  CHECK(with.lastContacts == without.lastContacts);
+  CHECK(with.lastNormals == without.lastNormals);
+  CHECK(with.contactLists == without.contactLists);
+}

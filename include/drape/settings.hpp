@@ -43,7 +43,8 @@ struct Settings {
   CollisionMethod collisionMethod = CollisionMethod::Improved;
   double thickness = 0.005;    ///< m: contacts hold the cloth this far outside each solid
   double normalDamping = 1;    ///< fraction of the separating normal velocity a contact removes, in [0, 1]
-  int pgdIterations = 8;       ///< most SDF evaluations per face in the deepest-point search (>= 1)
+  int pgdIterations = 12;      ///< most SDF evaluations per face in the deepest-point search (>= 1); it
+                               ///< stops earlier once certified, so this only caps curved faces
   bool culling = true;         ///< bounding-sphere culling of faces (exact: it never drops a contact)
   double propagationWeight = 0.5;  ///< share of a contact's normal velocity correction given to neighbours
   int propagationRings = 1;        ///< how many rings of neighbours receive it (0: none)

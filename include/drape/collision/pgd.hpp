@@ -1,18 +1,11 @@
 #pragma once
-// The deepest point of a face in a solid: bounding-sphere culling and projected gradient descent over the
-// face's barycentric simplex (paper 002, Fig 1).
+// The deepest point of a face in a solid: bounding-sphere culling, and a cutting-plane search over the face's
+// barycentric simplex (in place of the projected gradient descent of paper 002, Fig 1).
 
 #include <drape/math.hpp>
 
 #include <algorithm>
 #include <limits>
-
-#ifndef PGD_LAMBDA
-#define PGD_LAMBDA 0
-#endif
-#ifndef PGD_GAP
-#define PGD_GAP 2e-4
-#endif
 
 namespace drape {
 
@@ -51,16 +44,39 @@ template <Scalar S> FaceSphere<S> faceSphere(const Vec3<S>& x0, const Vec3<S>& x
   return {c, std::sqrt(r2)};
 }
 
-/// Kelley cutting planes for min phi(b0 x0 + b1 x1 + b2 x2) over the simplex, started from the centroid
-/// whose value phiC and gradient gradC the caller already has from culling.
+/// min phi(b0 x0 + b1 x1 + b2 x2) over the simplex, started from the centroid whose value phiC and gradient
+/// gradC the caller already has from culling; at most maxIterations SDF evaluations, the centroid's included.
+///
+/// Why cutting planes rather than projected gradient descent: every built-in solid is convex, so phi along a
+/// face is convex, but it is often not smooth there. Inside a box it is a max of planes (gradient steps
+/// zigzag across the crease and stall), a thin capsule or a small ball crossing the face makes it a V-shaped
+/// valley or a cone, and on a plane a gradient step that hits an edge crawls along it. Convexity gives every
+/// evaluation a global lower bound instead: the tangent plane phi_k + n_k . (x - p_k) lies below phi on the
+/// whole face. Kelley's method evaluates next where the max of those planes (the model) is lowest. On a max of
+/// planes or a cone the model becomes exact after a few cuts and the answer is exact; on smooth curved faces
+/// it closes in steadily. The first step goes to the corner the centroid's gradient points at, as the long
+/// first step of projected gradient descent does; a plane is done after that (two evaluations).
+///
+/// The model's minimum is a certified lower bound on the true minimum, so the search stops as soon as the
+/// best value found is within kGap face lengths of it, rather than after a fixed count: most faces take 2-5
+/// evaluations, and the budget only caps the curved cases (a ball smaller than a face).
+///
+/// Why the model is cheap to minimise: in barycentric coordinates a cut is linear, c_k . b with c_k its values
+/// at the three corners. We only ever evaluate at the model's minimiser, and the new cut is above the old
+/// model there (or the gap is closed and we stop), so the new minimum lies on the new cut (Seidel's
+/// incremental LP): clip the triangle to where the new cut is highest and take its lowest vertex. That is
+/// O(cuts) per step, with no LP solver. The cuts are kept (up to kMaxCuts; beyond that, only those active at
+/// the minimum, which keeps it the minimum); evaluating anywhere else, e.g. a damped or Newton step, would
+/// break that invariant and with it the certificate.
 template <Scalar S, class Field>
 FaceQuery<S> deepestPointOnFace(const Field& sdf, const Vec3<S>& x0, const Vec3<S>& x1, const Vec3<S>& x2,
                                 const Vec3<S>& centroid, S phiC, const Vec3<S>& gradC, int maxIterations) {
   FaceQuery<S> q{Vec3<S>::Constant(S(1) / S(3)), centroid, gradC, phiC, 1};
   constexpr int kMaxCuts = 16;
+  constexpr S kGap = S(3e-4);  // stop when within this many longest-edge lengths of the certified minimum
   const Vec3<S> e1 = x1 - x0, e2 = x2 - x0;
   const S extent = std::max({e1.norm(), e2.norm(), (x2 - x1).norm()});
-  const S tolerance = S(PGD_GAP) * extent;
+  const S tolerance = kGap * extent;
   // A cut is the tangent plane phi_k + n_k . (x - p_k), stored as its values at the three corners.
   auto cutAt = [&](const Vec3<S>& b, S phi, const Vec3<S>& n) {
     const S nd = n.dot(b[1] * e1 + b[2] * e2);
@@ -74,7 +90,9 @@ FaceQuery<S> deepestPointOnFace(const Field& sdf, const Vec3<S>& x0, const Vec3<
   Vec3<S> next = Vec3<S>::Unit(corner);
   S lower = model;
   bool exact = true;
-  Vec3<S> poly[kMaxCuts + 3], clipped[kMaxCuts + 3];
+  // Clipping a convex polygon adds at most one vertex per cut; the slack covers rounding.
+  constexpr int kMaxVertices = 2 * kMaxCuts + 6;
+  Vec3<S> poly[kMaxVertices], clipped[kMaxVertices];
   while (q.evaluations < maxIterations && q.phi - lower > tolerance) {
     const Vec3<S> b = next / next.sum();
     const Vec3<S> p = x0 + b[1] * e1 + b[2] * e2;
@@ -86,10 +104,10 @@ FaceQuery<S> deepestPointOnFace(const Field& sdf, const Vec3<S>& x0, const Vec3<
     const Vec3<S> c = cutAt(b, phi, n);
     if (count == kMaxCuts) {  // keep the cuts active at the model's minimum: it stays the minimum
       int kept = 0;
-      const S slack = S(1e-4) * tolerance;
+      const S slack = S(0.01) * tolerance;
       for (int k = 0; k < count; ++k)
         if (cuts[k].dot(b) >= model - slack && kept < kMaxCuts - 1) cuts[kept++] = cuts[k];
-      if (kept == kMaxCuts - 1) exact = false;
+      if (kept == kMaxCuts - 1) exact = false;  // maybe some dropped: the model's minimum is then no bound
       count = kept;
     }
     // The model's new minimum lies on the new cut (the old minimum violates it): minimise the new cut over
@@ -103,10 +121,11 @@ FaceQuery<S> deepestPointOnFace(const Field& sdf, const Vec3<S>& x0, const Vec3<
         const Vec3<S>& u = poly[i];
         const Vec3<S>& v = poly[(i + 1) % vertices];
         const S su = h.dot(u), sv = h.dot(v);
+        if (out + 2 > kMaxVertices) break;
         if (su >= S(0)) clipped[out++] = u;
         if ((su >= S(0)) != (sv >= S(0))) clipped[out++] = u + (su / (su - sv)) * (v - u);
       }
-      vertices = out;
+      vertices = out + 2 > kMaxVertices ? 0 : out;  // (rounding made a mess: give up, keep the best)
       std::copy(clipped, clipped + out, poly);
     }
     if (vertices == 0) break;
@@ -118,7 +137,6 @@ FaceQuery<S> deepestPointOnFace(const Field& sdf, const Vec3<S>& x0, const Vec3<
       if (m < model) model = m, arg = i;
     }
     next = poly[arg].cwiseMax(S(0));
-    if (PGD_LAMBDA > 0) next += S(PGD_LAMBDA) * (q.barycentric - next / next.sum());
     if (exact) lower = std::max(lower, model);
   }
   return q;
