@@ -30,9 +30,10 @@ double rad(double deg) { return deg * std::numbers::pi / 180.0; }
 
 TEMPLATE_TEST_CASE("improved: a cloth resting on a floor or sliding down a slope does not tremble nor penetrate",
                    "[trembling][penetration]", float, double) {
-  // Trembling as in DESIGN 10, over the second half of a 5 s run (the cloth has landed by then). The bound is
-  // the issue's 1e-4 m/s; float's rounding of positions (within 0.5 m of the local origin) is ~4e-6 m/s.
-  const double bound = 1e-4;
+  // Trembling as in DESIGN 10, over the second half of a 5 s run (the cloth has landed by then). The issue asks
+  // for 1e-4 m/s; we hold tighter. Measured worst cases: float 1.4e-6 m/s (positions within 0.5 m of the local
+  // origin round at ~6e-8 m, i.e. up to ~4e-6 m/s per frame), double 1e-13 m/s.
+  const double bound = std::is_same_v<TestType, float> ? 1e-5 : 1e-9;
   for (double angle : {0.0, 30.0})
     for (int subSteps : {1, 2, 5, 10})
       for (double mu : {0.0, 0.3}) {
