@@ -24,7 +24,8 @@ struct GutterConfig {
 struct GutterResult {
   double tremblingRms = 0, tremblingMax = 0, tremblingRmsCentred = 0;
   double contactFraction = 0;
-  double maxPenetration = 0;
+  double maxPenetration = 0;  ///< below a wall's surface (m), at substep ends
+  double maxShortfall = 0;    ///< inside the thickness (m), at substep ends
   double maxSpeed = 0;  ///< m/s over the window
 };
 
@@ -55,9 +56,12 @@ template <Scalar S> GutterResult runGutter(const GutterConfig& c) {
   meter.frame(solver, c.dt, false);
   const int window = int(c.windowStart * c.frames);
   for (int f = 1; f <= c.frames; ++f) {
-    solver.step(c.dt);
+    solver.step(c.dt, [&](const Solver<S>& s) {
+      const PenetrationStats p = penetration(s);
+      r.maxPenetration = std::max(r.maxPenetration, p.depth);
+      r.maxShortfall = std::max(r.maxShortfall, p.shortfall);
+    });
     meter.frame(solver, c.dt, f > window);
-    r.maxPenetration = std::max(r.maxPenetration, penetration(solver).depth);
     if (f > window)
       for (Index i = 0; i < solver.vertexCount(); ++i) r.maxSpeed = std::max(r.maxSpeed, solver.velocity(i).norm());
   }

@@ -255,21 +255,45 @@ template <Scalar S, class... Shapes> class BasicSolver {
     if (!baseline) collide(h, thickness);
   }
 
-  /// The "previous method": the same vertex and face contacts, projected inside the solve pass, with
-  /// position-level friction; the velocity update then turns every projection into velocity.
-  void collideBaseline(S h, S thickness) {
+  /// Projects every vertex, then (when kFaces and the field is not linear) every face, out of each solid in
+  /// turn, recording the contacts. On a linear field a face is deepest at a vertex, which the vertex pass has
+  /// already handled.
+  template <bool kFaces, bool kCull> void projectContacts(S thickness) {
     Vec3<S>* x = state_.x.data();
     const S* w = state_.invMass.data();
-    contacts_.begin();
     forEachCompiled([&](auto& list) {
       for (const auto& solid : list) {
         projectVertexContacts(solid, thickness, x, w, vertexCount(), contacts_, stats_);
-        if constexpr (!std::decay_t<decltype(solid.sdf)>::kLinear)
-          projectFaceContacts<true>(solid, thickness, settings_.pgdIterations, asset_->triangles, x, w, contacts_,
-                                    stats_);
+        if constexpr (kFaces && !std::decay_t<decltype(solid.sdf)>::kLinear)
+          projectFaceContacts<kCull>(solid, thickness, settings_.pgdIterations, asset_->triangles, x, w, contacts_,
+                                     stats_);
       }
     });
-    applyContactFriction(contacts_, x, xPrev_.data(), h);
+  }
+
+  /// Where two solids meet (a crease, a cloth pinched between a ball and the floor), pushing a vertex out of
+  /// one can put it back into the other: repeat the vertex passes until none moves (a few at most). A scene
+  /// with one solid never comes here.
+  void settleMultipleSolids(S thickness) {
+    if (solidCount() < 2) return;
+    for (int pass = 0; pass < kSettlePasses; ++pass) {
+      const auto before = stats_.vertexContacts;
+      projectContacts<false, false>(thickness);
+      if (stats_.vertexContacts == before) break;
+    }
+  }
+
+  Index solidCount() const {
+    return std::apply([](const auto&... lists) { return Index((lists.size() + ... + 0)); }, solids_);
+  }
+
+  /// The "previous method": the same vertex and face contacts, projected inside the solve pass, with
+  /// position-level friction; the velocity update then turns every projection into velocity.
+  void collideBaseline(S h, S thickness) {
+    contacts_.begin();
+    projectContacts<true, true>(thickness);
+    settleMultipleSolids(thickness);
+    applyContactFriction(contacts_, state_.x.data(), xPrev_.data(), h);
   }
 
   void collide(S h, S thickness) {
@@ -277,22 +301,14 @@ template <Scalar S, class... Shapes> class BasicSolver {
     Vec3<S>* v = state_.v.data();
     const S* w = state_.invMass.data();
     const bool faces = settings_.collisionMethod == CollisionMethod::Improved;
-    const bool cull = settings_.culling;
     contacts_.begin();
-    forEachCompiled([&](auto& list) {
-      for (const auto& solid : list) {
-        projectVertexContacts(solid, thickness, x, w, vertexCount(), contacts_, stats_);
-        // On a linear field a face is deepest at a vertex, which the vertex pass has already handled.
-        if constexpr (!std::decay_t<decltype(solid.sdf)>::kLinear) {
-          if (faces && cull)
-            projectFaceContacts<true>(solid, thickness, settings_.pgdIterations, asset_->triangles, x, w,
-                                      contacts_, stats_);
-          else if (faces)
-            projectFaceContacts<false>(solid, thickness, settings_.pgdIterations, asset_->triangles, x, w,
-                                       contacts_, stats_);
-        }
-      }
-    });
+    if (faces && settings_.culling)
+      projectContacts<true, true>(thickness);
+    else if (faces)
+      projectContacts<true, false>(thickness);
+    else
+      projectContacts<false, false>(thickness);
+    settleMultipleSolids(thickness);
     respondContacts(contacts_, x, xPrev_.data(), v, h, S(settings_.normalDamping));
     if (faces && settings_.propagationRings > 0 && settings_.propagationWeight > 0)
       propagateCorrections(contacts_, propagation_, asset_->vertexNeighbours, v, w, S(settings_.propagationWeight),
@@ -303,6 +319,7 @@ template <Scalar S, class... Shapes> class BasicSolver {
   static constexpr double kMaxDistance = 1e5;     ///< m, largest accepted offset from the local origin
   static constexpr double kMaxSpeed = 1e5;        ///< m/s, largest accepted vertex speed
   static constexpr double kMinSubStep = 1e-6;     ///< s, below this h^2 underflows float
+  static constexpr int kSettlePasses = 8;         ///< extra vertex passes where solids meet
 
   std::shared_ptr<const ClothAsset<S>> asset_;
   Settings settings_;

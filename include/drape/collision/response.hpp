@@ -54,8 +54,13 @@ template <Scalar S> struct ContactBuffer {
     }
   }
   bool live(Index i) const { return stamp[i] == current; }
-  /// The first surface the vertex touched this substep.
-  const Vec3<S>& normal(Index i) const { return slots[i][0].normal; }
+  /// The vertex's contact normal: the slots' normals weighted by their corrections (the first slot's if none).
+  Vec3<S> normal(Index i) const {
+    Vec3<S> sum = Vec3<S>::Zero();
+    for (int k = 0; k < slotCount[i]; ++k) sum += slots[i][k].correction * slots[i][k].normal;
+    const S len = sum.norm();
+    return len > S(0) ? Vec3<S>(sum / len) : slots[i][0].normal;
+  }
   const Vec3<S>& solidVelocity(Index i) const { return slots[i][0].solidVelocity; }
   /// Total normal position correction this substep (m).
   S correction(Index i) const {
@@ -86,7 +91,9 @@ template <Scalar S> struct ContactBuffer {
       for (int k = 0; k < kSlots; ++k)
         if (own[k].normal.dot(n) > bestCos) best = k, bestCos = own[k].normal.dot(n);
     }
-    own[best] = {n, vc, own[best].correction + dn, m.staticFriction, m.dynamicFriction};
+    if (bestCos >= kMergeCos) own[best].normal = n;  // the same surface, seen again: its latest normal
+    own[best].solidVelocity = vc;
+    own[best].correction += dn;
   }
 };
 
@@ -198,6 +205,12 @@ void respondContacts(ContactBuffer<S>& contacts, Vec3<S>* x, const Vec3<S>* xPre
       v[i] = c.solidVelocity + vnNew * n + vt;
       dvnSum += std::max(vnNew - vn, S(0));
     }
+    // Answering a later surface can restore velocity into an earlier one: remove that approach again.
+    for (int k = 0; k + 1 < contacts.slotCount[i]; ++k) {
+      const ContactSlot<S>& c = contacts.slots[i][k];
+      const S vn = c.normal.dot(v[i] - c.solidVelocity);
+      if (vn < S(0)) v[i] -= vn * c.normal;
+    }
     contacts.normalDv[i] = dvnSum;
   }
 }
@@ -243,7 +256,7 @@ void propagateCorrections(const ContactBuffer<S>& contacts, PropagationBuffer<S>
     for (const Index i : buf.sources) {
       if (buf.amount[i] <= S(0)) continue;
       const bool fromContact = ring == 0;
-      const Vec3<S>& n = fromContact ? contacts.normal(i) : buf.normalSum[i];
+      const Vec3<S> n = fromContact ? contacts.normal(i) : buf.normalSum[i];
       const Vec3<S>& vc = fromContact ? contacts.solidVelocity(i) : buf.velocitySum[i];
       for (const Index* it = neighbours.begin(i); it != neighbours.end(i); ++it) {
         const Index j = *it;
