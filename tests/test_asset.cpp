@@ -3,6 +3,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <memory>
 #include <set>
 
 namespace {
@@ -81,4 +82,20 @@ TEMPLATE_TEST_CASE("a mesh asset colours every edge and finds bend pairs", "[ass
   CHECK(a.bendPairs.size() == 4);  // the four spokes are interior
   requireValidColouring(a.stretch, a.vertexCount());
   CHECK(a.stretch.colourCount() >= 4);  // the centre has degree 4
+}
+
+TEST_CASE("a float cloth placed 20 km from the origin keeps exact rest lengths and positions", "[asset]") {
+  drape::GridDesc g;
+  g.nx = g.ny = 5;
+  g.spacing = 0.02;
+  g.placement.position = {1e4, -2e4, 5e3};
+  const auto asset = std::make_shared<const drape::ClothAsset<float>>(drape::ClothAsset<float>::grid(g));
+  for (drape::Index k = 0; k < asset->stretch.size(); ++k) CHECK(asset->stretch.restLength[k] == Approx(0.02).epsilon(1e-6));
+  drape::Solver<float> solver(asset);
+  CHECK((solver.position(0) - Eigen::Vector3d(1e4 - 0.04, -2e4 - 0.04, 5e3)).norm() < 1e-6);
+  // Moving it 2 km further keeps float's precision too: the local origin follows.
+  std::vector<Eigen::Vector3d> moved(solver.vertexCount());
+  for (drape::Index i = 0; i < solver.vertexCount(); ++i) moved[i] = solver.position(i) + Eigen::Vector3d(2000.001, 0, 0);
+  solver.setPositions(moved);
+  for (drape::Index i = 0; i < solver.vertexCount(); ++i) CHECK((solver.position(i) - moved[i]).norm() < 1e-6);
 }

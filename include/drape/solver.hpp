@@ -65,10 +65,17 @@ template <Scalar S, class... Shapes> class BasicSolver {
                     "setPositions got " + std::to_string(world.size()) + " positions for " +
                         std::to_string(vertexCount()) + " vertices");
     for (std::size_t i = 0; i < world.size(); ++i)
-      detail::require(detail::allFinite(world[i]) && (world[i] - state_.origin).cwiseAbs().maxCoeff() <= kMaxDistance,
-                      "position of vertex " + std::to_string(i) +
-                          " is not finite or lies beyond 1e5 m of the cloth's local origin");
-    for (std::size_t i = 0; i < world.size(); ++i) state_.x[i] = (world[i] - state_.origin).template cast<S>();
+      detail::require(detail::allFinite(world[i]) && world[i].cwiseAbs().maxCoeff() <= kMaxCoordinate,
+                      "position of vertex " + std::to_string(i) + " is not finite or lies beyond 1e9 m");
+    // The local origin moves to the new positions, so float keeps its precision wherever they are.
+    Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+    for (const auto& p : world) centre += p / double(world.size());
+    const Eigen::Vector3d origin = snapOrigin(centre);
+    for (std::size_t i = 0; i < world.size(); ++i)
+      detail::require((world[i] - origin).cwiseAbs().maxCoeff() <= kMaxDistance,
+                      "position of vertex " + std::to_string(i) + " lies more than 1e5 m from the cloth's centre");
+    state_.origin = origin;
+    for (std::size_t i = 0; i < world.size(); ++i) state_.x[i] = (world[i] - origin).template cast<S>();
   }
   /// Replaces all velocities (m/s), with the same checks.
   void setVelocities(const std::vector<Eigen::Vector3d>& v) {
@@ -175,13 +182,16 @@ template <Scalar S, class... Shapes> class BasicSolver {
     return i;
   }
 
+  /// Local origins sit on a 1/64 m lattice, so shifting float positions by their difference is exact.
+  static Eigen::Vector3d snapOrigin(const Eigen::Vector3d& p) { return (p * 64.0).array().round().matrix() / 64.0; }
+
   /// Moves the local origin to follow the cloth, in steps of 1/64 m so the shift is exact in float.
   void rebase() {
     Eigen::Vector3d centre = Eigen::Vector3d::Zero();
     for (const auto& p : state_.x) centre += p.template cast<double>();
     centre /= double(state_.x.size());
     if (centre.norm() < kRebaseDistance) return;
-    const Eigen::Vector3d shift = (centre * 64.0).array().round().matrix() / 64.0;
+    const Eigen::Vector3d shift = snapOrigin(centre);
     const Vec3<S> shiftS = shift.cast<S>();
     for (auto& p : state_.x) p -= shiftS;
     state_.origin += shift;
@@ -317,6 +327,7 @@ template <Scalar S, class... Shapes> class BasicSolver {
 
   static constexpr double kRebaseDistance = 0.5;  ///< m the cloth may drift from its local origin
   static constexpr double kMaxDistance = 1e5;     ///< m, largest accepted offset from the local origin
+  static constexpr double kMaxCoordinate = 1e9;   ///< m, largest accepted world coordinate
   static constexpr double kMaxSpeed = 1e5;        ///< m/s, largest accepted vertex speed
   static constexpr double kMinSubStep = 1e-6;     ///< s, below this h^2 underflows float
   static constexpr int kSettlePasses = 8;         ///< extra vertex passes where solids meet

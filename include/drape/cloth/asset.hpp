@@ -1,6 +1,7 @@
 #pragma once
 // The cloth asset: topology, rest data and constraint colouring, built once and shared by any number of
-// cloth states. Positions here are the rest configuration, in the cloth's own frame (metres).
+// cloth states. Rest positions are relative to the asset's origin (double), so rest lengths stay exact in
+// float wherever the cloth is placed.
 
 #include <drape/math.hpp>
 
@@ -48,7 +49,8 @@ struct AssetOptions {
 };
 
 template <Scalar S> struct ClothAsset {
-  std::vector<Vec3<S>> restPositions;            ///< #V rest positions (m)
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();  ///< world position the rest positions are relative to (m)
+  std::vector<Vec3<S>> restPositions;            ///< #V rest positions relative to origin (m)
   std::vector<std::array<Index, 3>> triangles;   ///< #F counter-clockwise faces
   std::vector<std::array<Index, 2>> edges;       ///< #E unique edges, each with its smaller index first
   std::vector<std::array<Index, 2>> bendPairs;   ///< the two far vertices of each interior edge
@@ -173,18 +175,20 @@ template <Scalar S> ClothAsset<S> ClothAsset<S>::grid(const GridDesc& desc, cons
                       desc.spacing * std::max(desc.nx, desc.ny) <= 1e5,
                   "grid spacing must be positive, finite and the grid at most 1e5 m across (got spacing " +
                       std::to_string(desc.spacing) + ")");
-  detail::require(detail::allFinite(desc.placement.position) && detail::allFinite(desc.placement.rotation.coeffs()) &&
+  detail::require(detail::allFinite(desc.placement.position) && desc.placement.position.cwiseAbs().maxCoeff() <= 1e7 &&
+                      detail::allFinite(desc.placement.rotation.coeffs()) &&
                       std::abs(desc.placement.rotation.norm() - 1.0) < 1e-6,
-                  "grid placement must be finite with a unit quaternion");
+                  "grid placement must be finite, within 1e7 m of the world origin, with a unit quaternion");
   ClothAsset asset;
   const Index nx = desc.nx, ny = desc.ny;
   auto id = [nx](Index i, Index j) { return j * nx + i; };
   const double x0 = -0.5 * (nx - 1) * desc.spacing, y0 = -0.5 * (ny - 1) * desc.spacing;
+  asset.origin = desc.placement.position;
   asset.restPositions.reserve(std::size_t(nx) * ny);
   for (Index j = 0; j < ny; ++j)
     for (Index i = 0; i < nx; ++i)
       asset.restPositions.push_back(
-          desc.placement.apply(Eigen::Vector3d(x0 + i * desc.spacing, y0 + j * desc.spacing, 0)).cast<S>());
+          (desc.placement.rotation * Eigen::Vector3d(x0 + i * desc.spacing, y0 + j * desc.spacing, 0)).template cast<S>());
   std::vector<std::array<Index, 2>> stretchPairs, shearPairs;
   for (Index j = 0; j < ny; ++j)
     for (Index i = 0; i < nx; ++i) {

@@ -21,12 +21,13 @@ template <Scalar S> struct ClothState {
                     "areaDensity must be positive and finite (got " + std::to_string(areaDensity) + " kg/m^2)");
     ClothState s;
     const Index n = asset.vertexCount();
-    // Keep the local frame near the cloth from the start.
+    // Keep the local frame near the cloth from the start (offsets computed in double, then rounded once).
     Eigen::Vector3d centre = Eigen::Vector3d::Zero();
     for (const auto& p : asset.restPositions) centre += p.template cast<double>();
-    s.origin = centre / double(n);
+    centre /= double(n);
+    s.origin = asset.origin + centre;
     s.x.resize(n);
-    for (Index i = 0; i < n; ++i) s.x[i] = (asset.restPositions[i].template cast<double>() - s.origin).template cast<S>();
+    for (Index i = 0; i < n; ++i) s.x[i] = (asset.restPositions[i].template cast<double>() - centre).template cast<S>();
     s.v.assign(n, Vec3<S>::Zero());
     std::vector<double> mass(n, 0.0);
     for (Index f = 0; f < asset.faceCount(); ++f)
