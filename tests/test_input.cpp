@@ -720,8 +720,8 @@ TEMPLATE_TEST_CASE("step rejects a bad dt before changing anything", "[input]", 
 }
 
 // ------------------------------------------------------------------------------------------------------------
-// Values that pass "finite" but that the solver cannot represent or compute with. Each currently ends in inf
-// or NaN (a SIGFPE under main.cpp's traps) instead of a drape::Error.
+// Values that pass "finite" but that the solver cannot represent or compute with: each must be rejected with a
+// drape::Error rather than end in inf or NaN (a SIGFPE under main.cpp's traps).
 
 TEMPLATE_TEST_CASE("step rejects a dt so small that the substep squared underflows", "[input]", float, double) {
   using S = TestType;

@@ -26,7 +26,7 @@ template <class S> RunFigures dropOnBall(const drape::Settings& settings, double
   drape::Solid<drape::Sphere> ball;
   ball.shape.radius = 0.15;
   ball.pose.position = {0, 0, 0.15};
-  ball.staticFriction = ball.dynamicFriction = 0.5;  // frictionless, a draped cloth would slide on forever
+  ball.staticFriction = ball.dynamicFriction = 0.5;  // without friction a draped cloth would slide on forever
   solver.addSolid(ball);
   drape::Solid<drape::Plane> floor;
   floor.staticFriction = floor.dynamicFriction = 0.5;

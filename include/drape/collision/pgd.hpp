@@ -18,7 +18,8 @@ template <Scalar S> struct FaceQuery {
   int evaluations;      ///< SDF evaluations spent, the centroid's included
 };
 
-/// Euclidean projection onto {b : b_i >= 0, sum b_i = 1} (sort-based, exact for three coordinates).
+/// Euclidean projection onto {b : b_i >= 0, sum b_i = 1} (sort-based, exact for three coordinates). The face
+/// search no longer needs it; it stays as a tested utility.
 template <Scalar S> Vec3<S> projectToSimplex(const Vec3<S>& y) {
   S u[3] = {y[0], y[1], y[2]};
   std::sort(u, u + 3, [](S a, S b) { return a > b; });

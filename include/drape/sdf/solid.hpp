@@ -16,8 +16,8 @@ template <class Shape> struct Solid {
   Eigen::Vector3d linearVelocity = Eigen::Vector3d::Zero();   ///< m/s, of the frame origin
   Eigen::Vector3d angularVelocity = Eigen::Vector3d::Zero();  ///< rad/s, world axes, about the frame origin
   Motion motion = Motion::Static;
-  double staticFriction = 0;   ///< Coulomb coefficient for sticking (position level)
-  double dynamicFriction = 0;  ///< Coulomb coefficient while sliding (velocity level)
+  double staticFriction = 0;   ///< Coulomb coefficient for sticking
+  double dynamicFriction = 0;  ///< Coulomb coefficient while sliding (applied to position and velocity alike)
 };
 
 /// The part of a compiled solid that contact response needs: its velocity field and friction.
