@@ -112,15 +112,15 @@ TEMPLATE_TEST_CASE("baseline trembles where a fold touches two walls; improved i
 }
 
 TEMPLATE_TEST_CASE("where two walls meet, improved keeps the cloth outside both", "[penetration]", float, double) {
-  // Pushing a vertex out of one wall can put it back into the other; the solver repeats its vertex passes
-  // where solids meet. At 45 and 60 degrees the thickness holds; in a 30-degree-wide V (75 degree walls) a
-  // shortfall within the thickness remains (measured ~1 mm of 5 mm), but nothing goes below a surface.
+  // Pushing a vertex out of one wall can put it back into the other. The solver places such vertices at the
+  // nearest point outside all their contact planes and repeats its vertex passes where solids meet; alternating
+  // projections alone left ~1 mm of a 5 mm thickness in a 30-degree-wide V (75 degree walls).
   for (double wall : {45.0, 60.0, 75.0}) {
     drape::scenes::GutterConfig c;
     c.wallDeg = wall;
     const auto r = drape::scenes::runGutter<TestType>(c);
     INFO("walls at " << wall << " degrees: shortfall " << r.maxShortfall << " m, depth " << r.maxPenetration);
-    if (wall < 70) CHECK(r.maxShortfall <= 0.01 * c.settings.thickness);
+    CHECK(r.maxShortfall <= 0.01 * c.settings.thickness);
     CHECK(r.maxPenetration == 0);
   }
 }

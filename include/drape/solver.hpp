@@ -281,15 +281,17 @@ template <Scalar S, class... Shapes> class BasicSolver {
     });
   }
 
-  /// Where two solids meet (a crease, a cloth pinched between a ball and the floor), pushing a vertex out of
-  /// one can put it back into the other: repeat the vertex passes until none moves (a few at most). A scene
-  /// with one solid never comes here.
+  /// Where surfaces meet (a crease, a box corner, a cloth pinched between a ball and the floor), pushing a
+  /// vertex out of one can put it back into another: place such vertices outside all their contact planes at
+  /// once, then, where several solids exist, repeat the vertex passes on the true fields until none moves.
   void settleMultipleSolids(S thickness) {
+    projectOntoContactPlanes(contacts_, state_.x.data());
     if (solidCount() < 2) return;
     for (int pass = 0; pass < kSettlePasses; ++pass) {
       const auto before = stats_.vertexContacts;
-      projectContacts<false, false>(thickness);
+      projectContacts<false, false>(thickness);  // records the surfaces a vertex was pushed into
       if (stats_.vertexContacts == before) break;
+      projectOntoContactPlanes(contacts_, state_.x.data());
     }
   }
 
@@ -330,7 +332,7 @@ template <Scalar S, class... Shapes> class BasicSolver {
   static constexpr double kMaxCoordinate = 1e9;   ///< m, largest accepted world coordinate
   static constexpr double kMaxSpeed = 1e5;        ///< m/s, largest accepted vertex speed
   static constexpr double kMinSubStep = 1e-6;     ///< s, below this h^2 underflows float
-  static constexpr int kSettlePasses = 8;         ///< extra vertex passes where solids meet
+  static constexpr int kSettlePasses = 4;         ///< extra vertex passes where solids meet
 
   std::shared_ptr<const ClothAsset<S>> asset_;
   Settings settings_;

@@ -9,6 +9,7 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 namespace drape {
@@ -19,6 +20,7 @@ template <Scalar S> struct ContactSlot {
   Vec3<S> solidVelocity;  ///< v_c at the vertex
   S correction;           ///< normal position correction along this normal this substep (m)
   S staticFriction, dynamicFriction;
+  S offset;               ///< the surface as a half-space: normal . x >= offset where the vertex was placed
 };
 
 /// Per-vertex contact records of one substep. A vertex may touch up to kSlots differently-facing surfaces
@@ -69,7 +71,8 @@ template <Scalar S> struct ContactBuffer {
     return sum;
   }
 
-  void record(Index i, const Vec3<S>& n, const Vec3<S>& vc, S dn, const SolidMotion<S>& m) {
+  /// Records that vertex i was placed at x, dn along n, out of a solid moving with m.
+  void record(Index i, const Vec3<S>& x, const Vec3<S>& n, const Vec3<S>& vc, S dn, const SolidMotion<S>& m) {
     if (stamp[i] != current) {
       stamp[i] = current;
       list.push_back(i);  // capacity is the vertex count: never allocates
@@ -83,7 +86,7 @@ template <Scalar S> struct ContactBuffer {
       if (c >= bestCos) best = k, bestCos = c;
     }
     if (best < 0 && slotCount[i] < kSlots) {
-      own[slotCount[i]++] = {n, vc, dn, m.staticFriction, m.dynamicFriction};
+      own[slotCount[i]++] = {n, vc, dn, m.staticFriction, m.dynamicFriction, n.dot(x)};
       return;
     }
     if (best < 0) {  // all slots taken by other directions: join the closest
@@ -91,7 +94,12 @@ template <Scalar S> struct ContactBuffer {
       for (int k = 0; k < kSlots; ++k)
         if (own[k].normal.dot(n) > bestCos) best = k, bestCos = own[k].normal.dot(n);
     }
-    if (bestCos >= kMergeCos) own[best].normal = n;  // the same surface, seen again: its latest normal
+    if (bestCos >= kMergeCos) {  // the same surface, seen again: its latest normal and placement
+      own[best].normal = n;
+      own[best].offset = n.dot(x);
+    } else {
+      own[best].offset = std::max(own[best].offset, own[best].normal.dot(x));
+    }
     own[best].solidVelocity = vc;
     own[best].correction += dn;
   }
@@ -116,7 +124,7 @@ void projectVertexContacts(const CompiledSolid<Shape, S>& solid, S thickness, Ve
     if (phi >= thickness || invMass[i] == S(0)) continue;
     const S dn = thickness - phi;
     x[i] += dn * n;
-    contacts.record(i, n, solid.motion.velocityAt(x[i]), dn, solid.motion);
+    contacts.record(i, x[i], n, solid.motion.velocityAt(x[i]), dn, solid.motion);
     ++stats.vertexContacts;
   }
   stats.sdfEvaluations += vertexCount;
@@ -154,10 +162,53 @@ void projectFaceContacts(const CompiledSolid<Shape, S>& solid, S thickness, int 
       if (wb[k] <= S(0)) continue;
       const S dn = wb[k] / denom * depth;
       x[t[k]] += dn * q.normal;
-      contacts.record(t[k], q.normal, solid.motion.velocityAt(x[t[k]]), dn, solid.motion);
+      contacts.record(t[k], x[t[k]], q.normal, solid.motion.velocityAt(x[t[k]]), dn, solid.motion);
     }
   }
   stats.facesTested += Index(triangles.size());
+}
+
+/// A vertex pushed out of several surfaces one after another (a crease, a box corner, a cloth pinched
+/// between two solids) may end up back inside an earlier one, and alternating projections close in slowly
+/// when the surfaces meet at a sharp angle. This places each such vertex at the nearest point outside all its
+/// contact half-spaces at once: the nearest feasible point among the projections onto every subset of the
+/// (at most three) planes, which is the exact projection onto their intersection.
+template <Scalar S> void projectOntoContactPlanes(const ContactBuffer<S>& contacts, Vec3<S>* x) {
+  for (const Index i : contacts.list) {
+    const int count = contacts.slotCount[i];
+    if (count < 2) continue;
+    const auto& sl = contacts.slots[i];
+    const Vec3<S> x0 = x[i];
+    auto feasible = [&](const Vec3<S>& y) {
+      for (int k = 0; k < count; ++k)
+        if (sl[k].normal.dot(y) < sl[k].offset - S(1e-6) * std::max(S(1), std::abs(sl[k].offset))) return false;
+      return true;
+    };
+    if (feasible(x0)) continue;
+    Vec3<S> best = x0;
+    S bestDist = std::numeric_limits<S>::infinity();
+    auto consider = [&](const Vec3<S>& y) {
+      const S d = (y - x0).squaredNorm();
+      if (d < bestDist && feasible(y)) best = y, bestDist = d;
+    };
+    for (int k = 0; k < count; ++k) consider(x0 + (sl[k].offset - sl[k].normal.dot(x0)) * sl[k].normal);
+    for (int j = 0; j < count; ++j)
+      for (int k = j + 1; k < count; ++k) {  // the line where planes j and k meet
+        const Vec3<S>& a = sl[j].normal;
+        const Vec3<S>& b = sl[k].normal;
+        const S ab = a.dot(b), det = S(1) - ab * ab;
+        if (det < S(1e-6)) continue;  // (nearly) parallel: the single-plane candidates cover it
+        const S ra = sl[j].offset - a.dot(x0), rb = sl[k].offset - b.dot(x0);
+        consider(x0 + ((ra - ab * rb) / det) * a + ((rb - ab * ra) / det) * b);
+      }
+    if (count == 3) {  // the corner where all three meet
+      Mat3<S> m;
+      m << sl[0].normal.transpose(), sl[1].normal.transpose(), sl[2].normal.transpose();
+      if (std::abs(m.determinant()) > S(1e-4))
+        consider(m.partialPivLu().solve(Vec3<S>(sl[0].offset, sl[1].offset, sl[2].offset)));
+    }
+    x[i] = best;
+  }
 }
 
 /// Coulomb friction on positions for one contact surface: the tangential displacement of this substep
