@@ -202,6 +202,7 @@ template <Scalar S, class... Shapes> class BasicSolver {
   }
 
   void prepareSolids(double h) {
+    hasFriction_ = false;
     std::apply(
         [&](auto&... lists) {
           (
@@ -209,6 +210,7 @@ template <Scalar S, class... Shapes> class BasicSolver {
                 using Shape = std::decay_t<decltype(list[0].shape)>;
                 auto& out = std::get<std::vector<CompiledSolid<Shape, S>>>(compiled_);
                 for (std::size_t k = 0; k < list.size(); ++k) {
+                  hasFriction_ = hasFriction_ || list[k].staticFriction > 0 || list[k].dynamicFriction > 0;
                   detail::advancePose(list[k], h);
                   out[k] = detail::compileSolid<Shape, S>(list[k], state_.origin);
                 }
@@ -305,7 +307,7 @@ template <Scalar S, class... Shapes> class BasicSolver {
     contacts_.begin();
     projectContacts<true, true>(thickness);
     settleMultipleSolids(thickness);
-    applyContactFriction(contacts_, state_.x.data(), xPrev_.data(), h);
+    if (hasFriction_) applyContactFriction(contacts_, state_.x.data(), xPrev_.data(), h);
   }
 
   void collide(S h, S thickness) {
@@ -321,7 +323,10 @@ template <Scalar S, class... Shapes> class BasicSolver {
     else
       projectContacts<false, false>(thickness);
     settleMultipleSolids(thickness);
-    respondContacts(contacts_, x, xPrev_.data(), v, h, S(settings_.normalDamping));
+    if (hasFriction_)
+      respondContacts<true>(contacts_, x, xPrev_.data(), v, h, S(settings_.normalDamping));
+    else
+      respondContacts<false>(contacts_, x, xPrev_.data(), v, h, S(settings_.normalDamping));
     if (faces && settings_.propagationRings > 0 && settings_.propagationWeight > 0)
       propagateCorrections(contacts_, propagation_, asset_->vertexNeighbours, v, w, S(settings_.propagationWeight),
                            settings_.propagationRings);
@@ -346,6 +351,7 @@ template <Scalar S, class... Shapes> class BasicSolver {
   ContactBuffer<S> contacts_;
   PropagationBuffer<S> propagation_;
   CollisionStats stats_;
+  bool hasFriction_ = false;  ///< some solid has friction this substep
 };
 
 /// The solver with every built-in shape.

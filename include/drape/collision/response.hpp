@@ -232,8 +232,9 @@ template <Scalar S> bool applyPositionFriction(const ContactSlot<S>& c, Vec3<S>&
 /// tangential velocity is kept minus Coulomb friction. Friction acts on positions (applyPositionFriction); a
 /// stuck vertex keeps no tangential velocity, a sliding one loses dynamicFriction * dn / h of its tangential
 /// speed, the same as its position lost, so a slip never carries on as velocity what friction took from the
-/// position (that mismatch makes a stuck cloth crawl downhill in stick-slip waves).
-template <Scalar S>
+/// position (that mismatch makes a stuck cloth crawl downhill in stick-slip waves). kFriction false (no solid
+/// of the scene has friction) compiles the friction out.
+template <bool kFriction, Scalar S>
 void respondContacts(ContactBuffer<S>& contacts, Vec3<S>* x, const Vec3<S>* xPrev, Vec3<S>* v, S h,
                      S normalDamping) {
   const S invH = S(1) / h;
@@ -246,12 +247,14 @@ void respondContacts(ContactBuffer<S>& contacts, Vec3<S>* x, const Vec3<S>* xPre
       const S vn = n.dot(vRel);
       Vec3<S> vt = vRel - vn * n;
       const S vnNew = vn < S(0) ? S(0) : vn * (S(1) - normalDamping);
-      if (applyPositionFriction(c, x[i], xPrev[i], h)) {
-        vt.setZero();
-      } else {
-        const S speed = vt.norm();
-        const S slow = c.dynamicFriction * c.correction * invH;
-        vt *= speed > slow ? (speed - slow) / speed : S(0);
+      if constexpr (kFriction) {
+        if (applyPositionFriction(c, x[i], xPrev[i], h)) {
+          vt.setZero();
+        } else {
+          const S speed = vt.norm();
+          const S slow = c.dynamicFriction * c.correction * invH;
+          vt *= speed > slow ? (speed - slow) / speed : S(0);
+        }
       }
       v[i] = c.solidVelocity + vnNew * n + vt;
       dvnSum += std::max(vnNew - vn, S(0));
