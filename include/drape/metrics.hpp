@@ -45,12 +45,9 @@ template <class Solver> PenetrationStats penetration(const Solver& solver, int p
       minPhi = std::min(minPhi, double(solid.sdf(p, n)));
     }
     for (const auto& t : solver.asset().triangles) {
-      const FaceSphere<S> sphere = faceSphere<S>(x[t[0]], x[t[1]], x[t[2]]);
-      Vec3<S> g;
-      const S phiC = solid.sdf(sphere.centre, g);
-      if (phiC > sphere.radius + S(thickness)) continue;  // exact: phi is 1-Lipschitz
-      const auto q = deepestPointOnFace<S>(solid.sdf, x[t[0]], x[t[1]], x[t[2]], sphere.centre, phiC, g, pgdIterations);
-      minPhi = std::min(minPhi, double(q.phi));
+      FaceQuery<S> q;  // culling is exact: phi is 1-Lipschitz
+      if (queryFace<true>(solid.sdf, x[t[0]], x[t[1]], x[t[2]], S(thickness), pgdIterations, q))
+        minPhi = std::min(minPhi, double(q.phi));
     }
   });
   return {std::max(0.0, -minPhi), std::max(0.0, thickness - minPhi)};

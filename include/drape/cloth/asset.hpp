@@ -124,8 +124,9 @@ DistanceSet<S> colourDistanceSet(Index vertexCount, const std::vector<std::array
 }
 
 /// Fills edges, bend pairs, adjacency and areas from positions and triangles (already validated).
+/// stretchPairs null: every edge is a stretch constraint (meshes).
 template <Scalar S>
-void finishAsset(ClothAsset<S>& asset, const std::vector<std::array<Index, 2>>& stretchPairs,
+void finishAsset(ClothAsset<S>& asset, const std::vector<std::array<Index, 2>>* stretchPairs,
                  const std::vector<std::array<Index, 2>>& shearPairs, const AssetOptions& options) {
   const Index nv = asset.vertexCount();
   const Index nf = asset.faceCount();
@@ -159,7 +160,7 @@ void finishAsset(ClothAsset<S>& asset, const std::vector<std::array<Index, 2>>& 
   asset.vertexFaces = buildAdjacency(nv, vf);
   asset.vertexEdges = buildAdjacency(nv, ve);
   asset.vertexNeighbours = buildAdjacency(nv, vv);
-  asset.stretch = colourDistanceSet<S>(nv, stretchPairs, asset.restPositions);
+  asset.stretch = colourDistanceSet<S>(nv, stretchPairs ? *stretchPairs : asset.edges, asset.restPositions);
   asset.shear = colourDistanceSet<S>(nv, shearPairs, asset.restPositions);
   if (options.bending) asset.bending = colourDistanceSet<S>(nv, asset.bendPairs, asset.restPositions);
 }
@@ -208,7 +209,7 @@ template <Scalar S> ClothAsset<S> ClothAsset<S>::grid(const GridDesc& desc, cons
         shearPairs.push_back({std::min(b, d), std::max(b, d)});
       }
     }
-  detail::finishAsset(asset, stretchPairs, shearPairs, options);
+  detail::finishAsset(asset, &stretchPairs, shearPairs, options);
   return asset;
 }
 
@@ -240,9 +241,7 @@ ClothAsset<S> ClothAsset<S>::fromMesh(const std::vector<Vec3<S>>& positions,
   asset.restPositions = positions;
   asset.triangles = triangles;
   // Edges are collected by finishAsset; every edge is structural.
-  std::vector<std::array<Index, 2>> none;
-  detail::finishAsset(asset, none, none, options);
-  asset.stretch = detail::colourDistanceSet<S>(nv, asset.edges, asset.restPositions);
+  detail::finishAsset(asset, nullptr, {}, options);
   return asset;
 }
 

@@ -143,4 +143,19 @@ FaceQuery<S> deepestPointOnFace(const Field& sdf, const Vec3<S>& x0, const Vec3<
   return q;
 }
 
+/// One face against one field: the bounding-sphere cull (when kCull) and, if the face may come within margin,
+/// its deepest point. Returns false when culled. Shared by the solver's face pass and the penetration metric.
+template <bool kCull, Scalar S, class Field>
+bool queryFace(const Field& sdf, const Vec3<S>& x0, const Vec3<S>& x1, const Vec3<S>& x2, S margin,
+               int maxIterations, FaceQuery<S>& q) {
+  const FaceSphere<S> sphere = faceSphere<S>(x0, x1, x2);
+  Vec3<S> gradC;
+  const S phiC = sdf(sphere.centre, gradC);
+  if constexpr (kCull) {
+    if (phiC > sphere.radius + margin) return false;
+  }
+  q = deepestPointOnFace<S>(sdf, x0, x1, x2, sphere.centre, phiC, gradC, maxIterations);
+  return true;
+}
+
 }  // namespace drape

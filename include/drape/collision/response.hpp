@@ -138,18 +138,12 @@ void projectFaceContacts(const CompiledSolid<Shape, S>& solid, S thickness, int 
                          const std::vector<std::array<Index, 3>>& triangles, Vec3<S>* x, const S* invMass,
                          ContactBuffer<S>& contacts, CollisionStats& stats) {
   for (const auto& t : triangles) {
-    const FaceSphere<S> sphere = faceSphere<S>(x[t[0]], x[t[1]], x[t[2]]);
-    Vec3<S> gradC;
-    const S phiC = solid.sdf(sphere.centre, gradC);
-    if constexpr (kCull) {
-      if (phiC > sphere.radius + thickness) {
-        ++stats.facesCulled;
-        ++stats.sdfEvaluations;
-        continue;
-      }
+    FaceQuery<S> q;
+    if (!queryFace<kCull>(solid.sdf, x[t[0]], x[t[1]], x[t[2]], thickness, pgdIterations, q)) {
+      ++stats.facesCulled;
+      ++stats.sdfEvaluations;
+      continue;
     }
-    const FaceQuery<S> q =
-        deepestPointOnFace<S>(solid.sdf, x[t[0]], x[t[1]], x[t[2]], sphere.centre, phiC, gradC, pgdIterations);
     stats.sdfEvaluations += q.evaluations;
     if (q.phi >= thickness) continue;
     const Vec3<S> wb(invMass[t[0]] * q.barycentric[0], invMass[t[1]] * q.barycentric[1],
