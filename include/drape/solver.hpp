@@ -305,7 +305,10 @@ template <Scalar S, class... Shapes> class BasicSolver {
   /// position-level friction; the velocity update then turns every projection into velocity.
   void collideBaseline(S h, S thickness) {
     contacts_.begin();
-    projectContacts<true, true>(thickness);
+    if (settings_.culling)
+      projectContacts<true, true>(thickness);
+    else
+      projectContacts<true, false>(thickness);
     settleMultipleSolids(thickness);
     if (hasFriction_) applyContactFriction(contacts_, state_.x.data(), xPrev_.data(), h);
   }
