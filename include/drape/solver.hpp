@@ -269,13 +269,13 @@ template <Scalar S, class... Shapes> class BasicSolver {
 
   /// Projects every vertex, then (when kFaces and the field is not linear) every face, out of each solid in
   /// turn, recording the contacts. On a linear field a face is deepest at a vertex, which the vertex pass has
-  /// already handled.
-  template <bool kFaces, bool kCull> void projectContacts(S thickness) {
+  /// already handled. Vertices already within `slack` of the thickness are left where they are.
+  template <bool kFaces, bool kCull> void projectContacts(S thickness, S slack = S(0)) {
     Vec3<S>* x = state_.x.data();
     const S* w = state_.invMass.data();
     forEachCompiled([&](auto& list) {
       for (const auto& solid : list) {
-        projectVertexContacts(solid, thickness, x, w, vertexCount(), contacts_, stats_);
+        projectVertexContacts(solid, thickness, x, w, vertexCount(), contacts_, stats_, slack);
         if constexpr (kFaces && !std::decay_t<decltype(solid.sdf)>::kLinear)
           projectFaceContacts<kCull>(solid, thickness, settings_.pgdIterations, asset_->triangles, x, w, contacts_,
                                      stats_);
@@ -283,15 +283,23 @@ template <Scalar S, class... Shapes> class BasicSolver {
     });
   }
 
-  /// Where surfaces meet (a crease, a box corner, a cloth pinched between a ball and the floor), pushing a
-  /// vertex out of one can put it back into another: place such vertices outside all their contact planes at
-  /// once, then, where several solids exist, repeat the vertex passes on the true fields until none moves.
-  void settleMultipleSolids(S thickness) {
+  /// All contacts of a substep: the projections, then where surfaces meet (a crease, a box corner, a cloth
+  /// pinched between a ball and the floor) pushing a vertex out of one can put it back into another, so such
+  /// vertices go outside all their contact planes at once and, where several solids exist, the vertex passes
+  /// repeat on the true fields until no vertex moves by more than a ten-thousandth of the thickness.
+  void projectAllContacts(S thickness, bool faces) {
+    contacts_.begin();
+    if (faces && settings_.culling)
+      projectContacts<true, true>(thickness);
+    else if (faces)
+      projectContacts<true, false>(thickness);
+    else
+      projectContacts<false, false>(thickness);
     projectOntoContactPlanes(contacts_, state_.x.data());
     if (solidCount() < 2) return;
     for (int pass = 0; pass < kSettlePasses; ++pass) {
       const auto before = stats_.vertexContacts;
-      projectContacts<false, false>(thickness);  // records the surfaces a vertex was pushed into
+      projectContacts<false, false>(thickness, S(1e-4) * thickness);
       if (stats_.vertexContacts == before) break;
       projectOntoContactPlanes(contacts_, state_.x.data());
     }
@@ -304,12 +312,7 @@ template <Scalar S, class... Shapes> class BasicSolver {
   /// The "previous method": the same vertex and face contacts, projected inside the solve pass, with
   /// position-level friction; the velocity update then turns every projection into velocity.
   void collideBaseline(S h, S thickness) {
-    contacts_.begin();
-    if (settings_.culling)
-      projectContacts<true, true>(thickness);
-    else
-      projectContacts<true, false>(thickness);
-    settleMultipleSolids(thickness);
+    projectAllContacts(thickness, true);
     if (hasFriction_) applyContactFriction(contacts_, state_.x.data(), xPrev_.data(), h);
   }
 
@@ -318,14 +321,7 @@ template <Scalar S, class... Shapes> class BasicSolver {
     Vec3<S>* v = state_.v.data();
     const S* w = state_.invMass.data();
     const bool faces = settings_.collisionMethod == CollisionMethod::Improved;
-    contacts_.begin();
-    if (faces && settings_.culling)
-      projectContacts<true, true>(thickness);
-    else if (faces)
-      projectContacts<true, false>(thickness);
-    else
-      projectContacts<false, false>(thickness);
-    settleMultipleSolids(thickness);
+    projectAllContacts(thickness, faces);
     if (hasFriction_)
       respondContacts<true>(contacts_, x, xPrev_.data(), v, h, S(settings_.normalDamping));
     else

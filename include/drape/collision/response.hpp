@@ -114,14 +114,15 @@ struct CollisionStats {
   std::int64_t sdfEvaluations = 0;
 };
 
-/// Moves every free vertex closer than `thickness` out along the normal and records the contact.
+/// Moves every free vertex closer than `thickness` (by more than `slack`) out along the normal and records the
+/// contact.
 template <class Shape, Scalar S>
 void projectVertexContacts(const CompiledSolid<Shape, S>& solid, S thickness, Vec3<S>* x, const S* invMass,
-                           Index vertexCount, ContactBuffer<S>& contacts, CollisionStats& stats) {
+                           Index vertexCount, ContactBuffer<S>& contacts, CollisionStats& stats, S slack = S(0)) {
   for (Index i = 0; i < vertexCount; ++i) {
     Vec3<S> n;
     const S phi = solid.sdf(x[i], n);
-    if (phi >= thickness || invMass[i] == S(0)) continue;
+    if (phi >= thickness - slack || invMass[i] == S(0)) continue;
     const S dn = thickness - phi;
     x[i] += dn * n;
     contacts.record(i, x[i], n, solid.motion.velocityAt(x[i]), dn, solid.motion);
