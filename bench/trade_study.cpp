@@ -114,7 +114,6 @@ struct Config {
     s.iterationCount = iterations;
     s.collisionMethod = method;
     s.pgdIterations = pgd;
-    s.threadCount = 1;
     return s;
   }
 };
