@@ -1,5 +1,6 @@
 # Error against cost (log-log) of the trade study, one panel per scene error, with the Pareto front that
-# bench/trade_study computed (trade_pareto_<panel>.csv). Run by trade_study after it writes the CSVs, or:
+# bench/trade_study computed (trade_pareto_<panel>.csv). Rows whose axis the scene cannot feel (axis_applies 0:
+# method and PGD on the hanging cloth, PGD on the plane) repeat the default's computation and are not drawn. Run by trade_study after it writes the CSVs, or:
 #   gnuplot -e "dir='docs/trade'" bench/plot_trade.gp
 if (!exists("dir")) dir = "docs/trade"
 csv = dir . "/trade.csv"
@@ -35,8 +36,9 @@ do for [p = 1:4] {
   col = word(columns, p)
   set title word(titles, p)
   set ylabel col noenhanced
+  if (sc eq "slope") { set key bottom right } else { set key top right }
   plot for [g = 1:words(groups)] csv \
-         using ((strcol("scene") eq sc && strcol("role") eq "sweep" && strcol("group") eq word(groups, g)) ? column("ms_per_frame") : NaN):(pos(column(col))) \
+         using ((strcol("scene") eq sc && strcol("role") eq "sweep" && column("axis_applies") == 1 && strcol("group") eq word(groups, g)) ? column("ms_per_frame") : NaN):(pos(column(col))) \
          with points pt gpoint(g) ps 1.3 lc rgb gcolour(g) title word(groups, g), \
        csv using ((strcol("scene") eq sc && strcol("role") eq "check") ? column("ms_per_frame") : NaN):(pos(column(col))) \
          with points pt 3 ps 2 lw 2 lc rgb "#444444" title "check: double, 500 substeps", \

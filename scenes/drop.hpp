@@ -19,8 +19,9 @@ struct DropConfig {
   int iterations = 1;
   int frames = 72;
   double dt = 1.0 / 60.0;  ///< s per frame
-  double radius = 0.15;    ///< m, the ball, centred on the world origin
-  double height = 0.25;    ///< m, height of the horizontal cloth's centre above the ball's centre
+  double radius = 0.15;    ///< m, the ball's radius
+  Eigen::Vector3d ballCentre = Eigen::Vector3d::Zero();  ///< m; the cloth's centre starts above the origin
+  double height = 0.25;    ///< m, height of the horizontal cloth's centre above the world origin
   double friction = 0.3;   ///< static and dynamic Coulomb coefficient of the ball
   double areaDensity = 0.1;  ///< kg/m^2
   int sampleEvery = 6;       ///< frames between recorded positions (the first at frame sampleEvery)
@@ -53,6 +54,7 @@ template <Scalar S, class SolverT = Solver<S>> SolverT makeDrop(const DropConfig
   SolverT solver(asset, s, c.areaDensity);
   Solid<Sphere> ball;
   ball.shape.radius = c.radius;
+  ball.pose.position = c.ballCentre;
   ball.staticFriction = ball.dynamicFriction = c.friction;
   solver.addSolid(ball);
   return solver;
