@@ -130,7 +130,8 @@ struct RunFigures {
 };
 
 /// An n x n cloth at 2 cm spacing dropped from 0.4 m onto a ball of radius 0.15 on the floor (mu = 0.5).
-template <class S> RunFigures dropOnBall(const drape::Settings& settings, double dt, double seconds, int n = 30) {
+template <class S>
+RunFigures dropOnBall(const drape::Settings& settings, double dt, double seconds, int n = 30, bool withBall = true) {
   drape::GridDesc grid;
   grid.nx = grid.ny = n;
   grid.spacing = 0.02;
@@ -141,7 +142,7 @@ template <class S> RunFigures dropOnBall(const drape::Settings& settings, double
   ball.shape.radius = 0.15;
   ball.pose.position = {0, 0, 0.15};
   ball.staticFriction = ball.dynamicFriction = 0.5;  // without friction a draped cloth would slide on forever
-  solver.addSolid(ball);
+  if (withBall) solver.addSolid(ball);
   drape::Solid<drape::Plane> floor;
   floor.staticFriction = floor.dynamicFriction = 0.5;
   solver.addSolid(floor);
@@ -307,8 +308,10 @@ TEMPLATE_TEST_CASE("mass ratio 1:1e6 between neighbours and pinned next to free:
 TEST_CASE("200 substeps in float: nothing explodes, precision loss against double measured", "[stability]") {
   drape::Settings s;
   s.subStepCount = 200;
-  const auto f = dropOnBall<float>(s, 1.0 / 60.0, 3.0, 16);
-  const auto d = dropOnBall<double>(s, 1.0 / 60.0, 3.0, 16);
+  // Onto the floor alone: a cloth on the ball balances, folds and slides off one way or another depending on
+  // rounding, so comparing float with double there measures which way a bifurcation went, not precision.
+  const auto f = dropOnBall<float>(s, 1.0 / 60.0, 3.0, 16, false);
+  const auto d = dropOnBall<double>(s, 1.0 / 60.0, 3.0, 16, false);
   printDrop<float>("case 3 200 substeps", f);
   printDrop<double>("case 3 200 substeps", d);
   const double dE = std::abs(f.energyEnd - d.energyEnd), dH = std::abs(f.meanHeight - d.meanHeight),
