@@ -381,13 +381,13 @@ Run dropOnSphereAndBox(bool culling, int frames) {
   Run run;
   for (int f = 0; f < frames; ++f) {
     solver.step(1.0 / 60.0, [&](const Solver<double>& s) {
-      run.contactLists.push_back(s.contacts().list);
+      run.contactLists.push_back(s.contacts().liveVertices());
       run.faceContacts += s.stats().faceContacts;
       if (f == 0) run.culledInAir += s.stats().facesCulled;
     });
   }
   for (Index i = 0; i < solver.vertexCount(); ++i) run.positions.push_back(solver.position(i));
-  run.lastContacts = solver.contacts().list;
+  run.lastContacts = solver.contacts().liveVertices();
   for (const Index i : run.lastContacts) run.lastNormals.push_back(solver.contacts().normal(i));
   return run;
 }

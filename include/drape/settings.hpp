@@ -49,6 +49,10 @@ struct Settings {
   double propagationWeight = 0.5;  ///< share of a contact's normal velocity correction given to neighbours
   int propagationRings = 1;        ///< how many rings of neighbours receive it (0: none)
 
+  /// Threads a step uses (OpenMP): 1 runs on the calling thread, 0 uses OpenMP's default team size. The
+  /// result is bit-identical for every count. Without OpenMP at compile time every count runs on one thread.
+  int threadCount = 1;
+
   /// Throws drape::Error naming the first out-of-range field.
   void validate() const {
     using detail::require;
@@ -73,6 +77,8 @@ struct Settings {
     requireRange(propagationWeight, 0, 1, "propagationWeight");
     require(propagationRings >= 0 && propagationRings <= 8,
             "propagationRings must be in [0, 8] (got " + std::to_string(propagationRings) + ")");
+    require(threadCount >= 0 && threadCount <= 1024,
+            "threadCount must be in [0, 1024] (got " + std::to_string(threadCount) + ")");
   }
 };
 

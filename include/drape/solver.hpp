@@ -8,6 +8,7 @@
 #include <drape/collision/pgd.hpp>
 #include <drape/collision/response.hpp>
 #include <drape/constraints/distance.hpp>
+#include <drape/detail/parallel.hpp>
 #include <drape/sdf/solid.hpp>
 #include <drape/settings.hpp>
 
@@ -38,6 +39,7 @@ template <Scalar S, class... Shapes> class BasicSolver {
         state_(ClothState<S>::fromAsset(*asset_, areaDensity)) {
     const Index n = asset_->vertexCount();
     xPrev_.resize(n);
+    xPredicted_.resize(n);
     lambdaStretch_.resize(asset_->stretch.size());
     lambdaShear_.resize(asset_->shear.size());
     lambdaBending_.resize(asset_->bending.size());
@@ -203,6 +205,7 @@ template <Scalar S, class... Shapes> class BasicSolver {
 
   void prepareSolids(double h) {
     hasFriction_ = false;
+    reconcile_ = solidCount() > 1;
     std::apply(
         [&](auto&... lists) {
           (
@@ -211,6 +214,7 @@ template <Scalar S, class... Shapes> class BasicSolver {
                 auto& out = std::get<std::vector<CompiledSolid<Shape, S>>>(compiled_);
                 for (std::size_t k = 0; k < list.size(); ++k) {
                   hasFriction_ = hasFriction_ || list[k].staticFriction > 0 || list[k].dynamicFriction > 0;
+                  reconcile_ = reconcile_ || !Sdf<Shape, S>::kLinear;
                   detail::advancePose(list[k], h);
                   out[k] = detail::compileSolid<Shape, S>(list[k], state_.origin);
                 }
@@ -225,46 +229,78 @@ template <Scalar S, class... Shapes> class BasicSolver {
   void subStep(double hd) {
     prepareSolids(hd);
     stats_ = {};
-    const S h = S(hd);
+    const int threads = settings_.threadCount == 0 ? hardwareThreads() : settings_.threadCount;
+    // One team for the whole substep: the loops inside are work-shared, so the team is made once.
+    DRAPE_OMP(parallel num_threads(threads) if (threads > 1))
+    subStepBody(S(hd));
+  }
+
+  void subStepBody(const S h) {
     const Index n = vertexCount();
     Vec3<S>* x = state_.x.data();
     Vec3<S>* v = state_.v.data();
+    Vec3<S>* x0 = xPrev_.data();
     const S* w = state_.invMass.data();
     const ClothAsset<S>& a = *asset_;
 
     // 1. predict
-    const Vec3<S> gh = (settings_.gravity * hd).template cast<S>();
+    const Vec3<S> gh = (settings_.gravity * double(h)).template cast<S>();
+    Vec3<S>* xp = xPredicted_.data();
+    DRAPE_OMP(for schedule(static))
     for (Index i = 0; i < n; ++i) {
-      xPrev_[i] = x[i];
-      if (w[i] == S(0)) continue;
-      v[i] += gh;
-      x[i] += h * v[i];
+      x0[i] = x[i];
+      if (w[i] != S(0)) {
+        v[i] += gh;
+        x[i] += h * v[i];
+      }
+      xp[i] = x[i];
     }
 
     // 2. solve
     const S h2 = h * h;
-    std::fill(lambdaStretch_.begin(), lambdaStretch_.end(), S(0));
-    std::fill(lambdaShear_.begin(), lambdaShear_.end(), S(0));
-    std::fill(lambdaBending_.begin(), lambdaBending_.end(), S(0));
-    std::fill(lambdaPins_.begin(), lambdaPins_.end(), S(0));
     const S stretchAlpha = S(settings_.stretchCompliance) / h2, shearAlpha = S(settings_.shearCompliance) / h2,
             bendingAlpha = S(settings_.bendingCompliance) / h2, pinAlpha = S(settings_.pinCompliance) / h2;
     const S thickness = S(settings_.thickness);
     const bool baseline = settings_.collisionMethod == CollisionMethod::Baseline;
-    for (int it = 0; it < settings_.iterationCount; ++it) {
-      solveDistanceSet(a.stretch, stretchAlpha, lambdaStretch_.data(), x, w);
-      solveDistanceSet(a.shear, shearAlpha, lambdaShear_.data(), x, w);
-      solveDistanceSet(a.bending, bendingAlpha, lambdaBending_.data(), x, w);
-      solvePins(pinLocal_.data(), Index(pinLocal_.size()), pinAlpha, lambdaPins_.data(), x, w);
+    const int iterations = settings_.iterationCount;
+    if (iterations > 1) {  // one pass needs no multipliers (see solveDistanceSet)
+      DRAPE_OMP(single)
+      {
+        std::fill(lambdaStretch_.begin(), lambdaStretch_.end(), S(0));
+        std::fill(lambdaShear_.begin(), lambdaShear_.end(), S(0));
+        std::fill(lambdaBending_.begin(), lambdaBending_.end(), S(0));
+      }
+    }
+    for (int it = 0; it < iterations; ++it) {
+      solveSet(a.stretch, stretchAlpha, lambdaStretch_.data(), iterations);
+      solveSet(a.shear, shearAlpha, lambdaShear_.data(), iterations);
+      solveSet(a.bending, bendingAlpha, lambdaBending_.data(), iterations);
+      if (!pinLocal_.empty()) {
+        DRAPE_OMP(single)
+        {
+          if (it == 0) std::fill(lambdaPins_.begin(), lambdaPins_.end(), S(0));
+          solvePins(pinLocal_.data(), Index(pinLocal_.size()), pinAlpha, lambdaPins_.data(), x, w);
+        }
+      }
       if (baseline) collideBaseline(h, thickness);
     }
 
-    // 3. update velocity
+    // 3. update velocity: v = (x - x0) / h, computed as v + (x - x_predicted) / h so that the rounding of the
+    //    prediction x0 + h v (in float, an ulp of the position, i.e. ulp / h of speed: 4e-4 m/s at 0.5 m and
+    //    h = 1/1200 s) does not enter the velocity; free flight keeps v exact.
     const S invH = S(1) / h;
-    for (Index i = 0; i < n; ++i) v[i] = (x[i] - xPrev_[i]) * invH;
+    DRAPE_OMP(for schedule(static))
+    for (Index i = 0; i < n; ++i) v[i] += (x[i] - xp[i]) * invH;
 
     // 4. collide
     if (!baseline) collide(h, thickness);
+  }
+
+  void solveSet(const DistanceSet<S>& set, S alpha, S* lambda, int iterations) {
+    if (iterations > 1 && alpha > S(0))
+      solveDistanceSet<true>(set, alpha, lambda, state_.x.data(), state_.invMass.data());
+    else
+      solveDistanceSet<false>(set, alpha, lambda, state_.x.data(), state_.invMass.data());
   }
 
   /// Projects every vertex, then (when kFaces and the field is not linear) every face, out of each solid in
@@ -276,9 +312,11 @@ template <Scalar S, class... Shapes> class BasicSolver {
     forEachCompiled([&](auto& list) {
       for (const auto& solid : list) {
         projectVertexContacts(solid, thickness, x, w, vertexCount(), contacts_, stats_, slack);
-        if constexpr (kFaces && !std::decay_t<decltype(solid.sdf)>::kLinear)
+        if constexpr (kFaces && !std::decay_t<decltype(solid.sdf)>::kLinear) {
+          DRAPE_OMP(single)
           projectFaceContacts<kCull>(solid, thickness, settings_.pgdIterations, asset_->triangles, x, w, contacts_,
                                      stats_);
+        }
       }
     });
   }
@@ -288,6 +326,7 @@ template <Scalar S, class... Shapes> class BasicSolver {
   /// vertices go outside all their contact planes at once and, where several solids exist, the vertex passes
   /// repeat on the true fields until no vertex moves by more than a ten-thousandth of the thickness.
   void projectAllContacts(S thickness, bool faces) {
+    DRAPE_OMP(single)
     contacts_.begin();
     if (faces && settings_.culling)
       projectContacts<true, true>(thickness);
@@ -295,10 +334,14 @@ template <Scalar S, class... Shapes> class BasicSolver {
       projectContacts<true, false>(thickness);
     else
       projectContacts<false, false>(thickness);
+    if (!reconcile_) return;  // a lone plane gives each vertex one surface: nothing to reconcile
     projectOntoContactPlanes(contacts_, state_.x.data());
     if (solidCount() < 2) return;
     for (int pass = 0; pass < kSettlePasses; ++pass) {
+      // Every thread reads the count here, between two barriers (the one ending the loop above and the one
+      // ending the vertex pass below), so all take the same branch.
       const auto before = stats_.vertexContacts;
+      DRAPE_OMP(barrier)
       projectContacts<false, false>(thickness, S(1e-4) * thickness);
       if (stats_.vertexContacts == before) break;
       projectOntoContactPlanes(contacts_, state_.x.data());
@@ -345,12 +388,13 @@ template <Scalar S, class... Shapes> class BasicSolver {
   std::tuple<std::vector<CompiledSolid<Shapes, S>>...> compiled_;
   std::vector<Pin> pins_;
   std::vector<PinTarget<S>> pinLocal_;
-  std::vector<Vec3<S>> xPrev_;
+  std::vector<Vec3<S>> xPrev_, xPredicted_;
   std::vector<S> lambdaStretch_, lambdaShear_, lambdaBending_, lambdaPins_;
   ContactBuffer<S> contacts_;
   PropagationBuffer<S> propagation_;
   CollisionStats stats_;
   bool hasFriction_ = false;  ///< some solid has friction this substep
+  bool reconcile_ = false;    ///< a vertex may touch several surfaces this substep
 };
 
 /// The solver with every built-in shape.

@@ -7,6 +7,8 @@
 #include <drape/collision/pgd.hpp>
 #include <drape/sdf/solid.hpp>
 
+#include <drape/detail/parallel.hpp>
+
 #include <array>
 #include <cstdint>
 #include <limits>
@@ -27,14 +29,13 @@ template <Scalar S> struct ContactSlot {
 /// (two planes of a crease, the faces of a box corner), each answered along its own normal: answering only
 /// one leaves the velocity into the others in place, which then grows without bound. Contacts whose normals
 /// agree within kMergeCos share a slot. A record is live when stamp[i] == current, so nothing is cleared per
-/// substep; `list` holds the live vertices in the order they were first touched.
+/// substep, and a vertex's record is written only by the work item that owns the vertex.
 template <Scalar S> struct ContactBuffer {
   static constexpr int kSlots = 3;
   static constexpr S kMergeCos = S(0.95);
 
   std::vector<std::uint32_t> stamp;
   std::uint32_t current = 0;
-  std::vector<Index> list;
   std::vector<std::array<ContactSlot<S>, kSlots>> slots;
   std::vector<std::uint8_t> slotCount;
   std::vector<S> normalDv;  ///< normal velocity change the response made (m/s), the source of propagation
@@ -42,20 +43,25 @@ template <Scalar S> struct ContactBuffer {
   void resize(Index n) {
     stamp.assign(n, 0);
     current = 0;
-    list.clear();
-    list.reserve(n);
     slots.resize(n);
     slotCount.assign(n, 0);
     normalDv.resize(n);
   }
   void begin() {
-    list.clear();
     if (++current == 0) {  // wrapped after 2^32 substeps: restart the stamps
       std::fill(stamp.begin(), stamp.end(), 0);
       current = 1;
     }
   }
   bool live(Index i) const { return stamp[i] == current; }
+  Index size() const { return Index(stamp.size()); }
+  /// The vertices in contact this substep, in ascending order (allocates: for tests and tools).
+  std::vector<Index> liveVertices() const {
+    std::vector<Index> out;
+    for (Index i = 0; i < size(); ++i)
+      if (live(i)) out.push_back(i);
+    return out;
+  }
   /// The vertex's contact normal: the slots' normals weighted by their corrections (the first slot's if none).
   Vec3<S> normal(Index i) const {
     Vec3<S> sum = Vec3<S>::Zero();
@@ -75,7 +81,6 @@ template <Scalar S> struct ContactBuffer {
   void record(Index i, const Vec3<S>& x, const Vec3<S>& n, const Vec3<S>& vc, S dn, const SolidMotion<S>& m) {
     if (stamp[i] != current) {
       stamp[i] = current;
-      list.push_back(i);  // capacity is the vertex count: never allocates
       slotCount[i] = 0;
     }
     auto& own = slots[i];
@@ -115,25 +120,33 @@ struct CollisionStats {
 };
 
 /// Moves every free vertex closer than `thickness` (by more than `slack`) out along the normal and records the
-/// contact.
+/// contact. A work-shared loop; the counts are added once per thread.
 template <class Shape, Scalar S>
 void projectVertexContacts(const CompiledSolid<Shape, S>& solid, S thickness, Vec3<S>* x, const S* invMass,
                            Index vertexCount, ContactBuffer<S>& contacts, CollisionStats& stats, S slack = S(0)) {
+  std::int64_t found = 0;
+  DRAPE_OMP(for schedule(static) nowait)
   for (Index i = 0; i < vertexCount; ++i) {
+    if (invMass[i] == S(0)) continue;
     Vec3<S> n;
     const S phi = solid.sdf(x[i], n);
-    if (phi >= thickness - slack || invMass[i] == S(0)) continue;
+    if (phi >= thickness - slack) continue;
     const S dn = thickness - phi;
     x[i] += dn * n;
     contacts.record(i, x[i], n, solid.motion.velocityAt(x[i]), dn, solid.motion);
-    ++stats.vertexContacts;
+    ++found;
   }
+  DRAPE_OMP(atomic)
+  stats.vertexContacts += found;
+  DRAPE_OMP(atomic)
   stats.sdfEvaluations += vertexCount;
+  DRAPE_OMP(barrier)
 }
 
 /// For every face: cull by bounding sphere (when kCull), find the deepest point by PGD, and if it is closer
 /// than `thickness`, move the face's vertices, weighted by barycentric weight and inverse mass
-/// (dx_i = w_i b_i / sum_j w_j b_j^2 * depth * n), so that point reaches the thickness.
+/// (dx_i = w_i b_i / sum_j w_j b_j^2 * depth * n), so that point reaches the thickness. Serial: neighbouring
+/// faces share vertices.
 template <bool kCull, class Shape, Scalar S>
 void projectFaceContacts(const CompiledSolid<Shape, S>& solid, S thickness, int pgdIterations,
                          const std::vector<std::array<Index, 3>>& triangles, Vec3<S>* x, const S* invMass,
@@ -169,7 +182,10 @@ void projectFaceContacts(const CompiledSolid<Shape, S>& solid, S thickness, int 
 /// contact half-spaces at once: the nearest feasible point among the projections onto every subset of the
 /// (at most three) planes, which is the exact projection onto their intersection.
 template <Scalar S> void projectOntoContactPlanes(const ContactBuffer<S>& contacts, Vec3<S>* x) {
-  for (const Index i : contacts.list) {
+  const Index n = contacts.size();
+  DRAPE_OMP(for schedule(static))
+  for (Index i = 0; i < n; ++i) {
+    if (!contacts.live(i)) continue;
     const int count = contacts.slotCount[i];
     if (count < 2) continue;
     const auto& sl = contacts.slots[i];
@@ -233,7 +249,10 @@ template <bool kFriction, Scalar S>
 void respondContacts(ContactBuffer<S>& contacts, Vec3<S>* x, const Vec3<S>* xPrev, Vec3<S>* v, S h,
                      S normalDamping) {
   const S invH = S(1) / h;
-  for (const Index i : contacts.list) {
+  const Index vertices = contacts.size();
+  DRAPE_OMP(for schedule(static))
+  for (Index i = 0; i < vertices; ++i) {
+    if (!contacts.live(i)) continue;
     S dvnSum = 0;
     for (int k = 0; k < contacts.slotCount[i]; ++k) {
       const ContactSlot<S>& c = contacts.slots[i][k];
@@ -266,86 +285,87 @@ void respondContacts(ContactBuffer<S>& contacts, Vec3<S>* x, const Vec3<S>* xPre
 
 /// Baseline friction: position-level Coulomb friction for every contact of the current solve pass.
 template <Scalar S> void applyContactFriction(const ContactBuffer<S>& contacts, Vec3<S>* x, const Vec3<S>* xPrev, S h) {
-  for (const Index i : contacts.list)
-    for (int k = 0; k < contacts.slotCount[i]; ++k) applyPositionFriction(contacts.slots[i][k], x[i], xPrev[i], h);
+  const Index n = contacts.size();
+  DRAPE_OMP(for schedule(static))
+  for (Index i = 0; i < n; ++i)
+    if (contacts.live(i))
+      for (int k = 0; k < contacts.slotCount[i]; ++k) applyPositionFriction(contacts.slots[i][k], x[i], xPrev[i], h);
 }
 
-/// Scratch for propagation rings.
+/// Scratch for propagation rings. reach[r & 1][j] records that ring r reached vertex j in call `pass`; ring r
+/// reads the other parity's entries and writes its own, so no entry is read and written in the same loop.
 template <Scalar S> struct PropagationBuffer {
-  std::vector<std::uint32_t> stamp;
-  std::vector<Vec3<S>> normalSum, velocitySum;
-  std::vector<S> amountSum, amount;
-  std::vector<Index> count;
-  std::vector<Index> sources, next;
+  std::uint64_t pass = 0;
+  std::vector<std::uint64_t> reach[2];
+  std::vector<Vec3<S>> normal, velocity;
+  std::vector<S> amount;
 
   void resize(Index n) {
-    stamp.assign(n, 0);
-    normalSum.resize(n);
-    velocitySum.resize(n);
-    amountSum.resize(n);
+    pass = 0;
+    reach[0].assign(n, 0);
+    reach[1].assign(n, 0);
+    normal.resize(n);
+    velocity.resize(n);
     amount.resize(n);
-    count.resize(n);
-    sources.reserve(n);
-    next.reserve(n);
   }
+  std::uint64_t key(int ring) const { return pass * 16 + std::uint64_t(ring); }
+  bool reachedThisPass(Index j) const { return reach[0][j] >= pass * 16 || reach[1][j] >= pass * 16; }
 };
 
 /// Spreads the contacts' normal velocity corrections to the vertices around them (paper 002): ring r gets
 /// weight^r of the mean correction of its sources, along their mean normal, and only as much as removes its
 /// own approach toward the solid, so a neighbour is never pushed away (which would make the seam shake).
+/// Each vertex gathers from its neighbours in the ring before (a work-shared loop per ring; the GPU kernel
+/// gathers the same way), so the sums have one order whatever the thread count.
 template <Scalar S>
 void propagateCorrections(const ContactBuffer<S>& contacts, PropagationBuffer<S>& buf, const Adjacency& neighbours,
                           Vec3<S>* v, const S* invMass, S weight, int rings) {
-  // Sources of ring 1 are the contact vertices; their amount is their own normal velocity change.
-  buf.sources.assign(contacts.list.begin(), contacts.list.end());
-  for (const Index i : contacts.list) buf.amount[i] = contacts.normalDv[i];
+  const Index n = contacts.size();
   const std::uint32_t mark = contacts.current;
-  for (int ring = 0; ring < rings; ++ring) {
-    buf.next.clear();
-    for (const Index i : buf.sources) {
-      if (buf.amount[i] <= S(0)) continue;
-      const bool fromContact = ring == 0;
-      const Vec3<S> n = fromContact ? contacts.normal(i) : buf.normalSum[i];
-      const Vec3<S>& vc = fromContact ? contacts.solidVelocity(i) : buf.velocitySum[i];
-      for (const Index* it = neighbours.begin(i); it != neighbours.end(i); ++it) {
-        const Index j = *it;
-        if (contacts.stamp[j] == mark || invMass[j] == S(0)) continue;
-        if (buf.stamp[j] != mark) {  // first time j is reached (rings never revisit a vertex)
-          buf.stamp[j] = mark;
-          buf.normalSum[j].setZero();
-          buf.velocitySum[j].setZero();
-          buf.amountSum[j] = 0;
-          buf.count[j] = 0;
-          buf.next.push_back(j);
-        } else if (buf.count[j] < 0) {
-          continue;  // already settled in an earlier ring
+  DRAPE_OMP(single)
+  ++buf.pass;
+  for (int ring = 1; ring <= rings; ++ring) {
+    const std::uint64_t from = buf.key(ring - 1), to = buf.key(ring);
+    const std::uint64_t* reachFrom = buf.reach[(ring - 1) & 1].data();
+    std::uint64_t* reachTo = buf.reach[ring & 1].data();
+    DRAPE_OMP(for schedule(static))
+    for (Index j = 0; j < n; ++j) {
+      if (contacts.stamp[j] == mark || invMass[j] == S(0)) continue;
+      if (ring > 1 && buf.reachedThisPass(j)) continue;  // settled in an earlier ring
+      Vec3<S> normalSum = Vec3<S>::Zero(), velocitySum = Vec3<S>::Zero();
+      S amountSum = 0;
+      int count = 0;
+      for (const Index* it = neighbours.begin(j); it != neighbours.end(j); ++it) {
+        const Index i = *it;
+        if (ring == 1) {
+          if (contacts.stamp[i] != mark || contacts.normalDv[i] <= S(0)) continue;
+          normalSum += contacts.normal(i);
+          velocitySum += contacts.solidVelocity(i);
+          amountSum += contacts.normalDv[i];
+        } else {
+          if (reachFrom[i] != from || buf.amount[i] <= S(0)) continue;
+          normalSum += buf.normal[i];
+          velocitySum += buf.velocity[i];
+          amountSum += buf.amount[i];
         }
-        buf.normalSum[j] += n;
-        buf.velocitySum[j] += vc;
-        buf.amountSum[j] += buf.amount[i];
-        ++buf.count[j];
+        ++count;
       }
-    }
-    for (const Index j : buf.next) {
-      const S len = buf.normalSum[j].norm();
-      const S inv = S(1) / S(buf.count[j]);
-      buf.count[j] = -1;
+      if (count == 0) continue;
+      reachTo[j] = to;
       buf.amount[j] = 0;
+      const S len = normalSum.norm();
       if (len <= S(0)) continue;
-      const Vec3<S> n = buf.normalSum[j] / len;
-      const Vec3<S> vc = buf.velocitySum[j] * inv;
-      const S approach = -n.dot(v[j] - vc);
-      const S give = weight * buf.amountSum[j] * inv;
-      if (approach > S(0)) {
-        const S applied = std::min(approach, give);
-        v[j] += applied * n;
-      }
+      const S inv = S(1) / S(count);
+      const Vec3<S> nj = normalSum / len;
+      const Vec3<S> vc = velocitySum * inv;
+      const S approach = -nj.dot(v[j] - vc);
+      const S give = weight * amountSum * inv;
+      if (approach > S(0)) v[j] += std::min(approach, give) * nj;
       // The next ring sees this ring's share, not what it happened to need.
       buf.amount[j] = give;
-      buf.normalSum[j] = n;
-      buf.velocitySum[j] = vc;
+      buf.normal[j] = nj;
+      buf.velocity[j] = vc;
     }
-    buf.sources.swap(buf.next);
   }
 }
 

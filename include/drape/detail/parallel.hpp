@@ -1,0 +1,35 @@
+#pragma once
+// Threads. The solver opens one OpenMP team per substep and every per-vertex or per-constraint loop inside it
+// is a work-shared loop over items that write only their own vertices (one colour of constraints, one vertex
+// of the contact response), so the result does not depend on how many threads share the work. Compiled
+// without OpenMP, the directives vanish and everything runs on the calling thread.
+
+#ifdef _OPENMP
+#include <omp.h>
+#define DRAPE_PRAGMA(x) _Pragma(#x)
+#define DRAPE_OMP(x) DRAPE_PRAGMA(omp x)
+#else
+#define DRAPE_OMP(x)
+#endif
+
+namespace drape {
+
+/// How many threads a solver with threadCount 0 uses: OpenMP's default team size, or 1 without OpenMP.
+inline int hardwareThreads() {
+#ifdef _OPENMP
+  return omp_get_max_threads();
+#else
+  return 1;
+#endif
+}
+
+/// Whether drape was compiled with OpenMP (threadCount above 1 has an effect).
+constexpr bool threadsAvailable() {
+#ifdef _OPENMP
+  return true;
+#else
+  return false;
+#endif
+}
+
+}  // namespace drape
