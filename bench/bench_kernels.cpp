@@ -1,0 +1,121 @@
+// Kernel micro-benchmarks, ns per item (items/s inverted): one distance-constraint set per type, the cull of
+// a far face, the deepest-point search per shape, the contact response and propagation.
+// Run: build/bench/bench_kernels --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+#include <drape/drape.hpp>
+
+#include <benchmark/benchmark.h>
+
+#include <memory>
+#include <random>
+
+namespace {
+
+using drape::Index;
+
+template <class S> std::shared_ptr<const drape::ClothAsset<S>> grid(int nx, int ny) {
+  drape::GridDesc g;
+  g.nx = nx;
+  g.ny = ny;
+  g.spacing = 0.02;
+  return std::make_shared<const drape::ClothAsset<S>>(drape::ClothAsset<S>::grid(g));
+}
+
+void perItem(benchmark::State& state, double items) {
+  state.counters["ns_per_item"] =
+      benchmark::Counter(items, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+}
+
+/// One pass over the stretch (0), shear (1) or bending (2) set of a 50x80 grid, stretched 1 % (every
+/// constraint does its full arithmetic).
+template <class S> void distanceSet(benchmark::State& state) {
+  const auto asset = grid<S>(50, 80);
+  const drape::DistanceSet<S>& set =
+      state.range(0) == 0 ? asset->stretch : state.range(0) == 1 ? asset->shear : asset->bending;
+  std::vector<drape::Vec3<S>> x(asset->restPositions);
+  for (auto& p : x) p *= S(1.01);
+  const std::vector<S> w(x.size(), S(10));
+  for (auto _ : state) {
+    drape::solveDistanceSet<false>(set, S(0), static_cast<S*>(nullptr), x.data(), w.data());
+    for (auto& p : x) p *= S(1.0001);  // keep them stretched
+    benchmark::ClobberMemory();
+  }
+  perItem(state, double(set.size()));
+}
+
+template <class Shape> Shape shapeFor();
+template <> drape::Plane shapeFor() { return {}; }
+template <> drape::Sphere shapeFor() { return {0.3}; }
+template <> drape::Box shapeFor() { return {Eigen::Vector3d(0.3, 0.2, 0.1)}; }
+template <> drape::Capsule shapeFor() { return {0.05, 0.3}; }
+
+/// The deepest-point search on random 2 cm faces near the surface of each shape, or (cull) far from it.
+template <class Shape, class S, bool kFar> void faceQuery(benchmark::State& state) {
+  const drape::Pose pose;
+  const auto sdf = drape::detail::compileSdf<S>(shapeFor<Shape>(), pose, Eigen::Vector3d::Zero());
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1, 1);
+  constexpr int kFaces = 1024;
+  std::vector<std::array<drape::Vec3<S>, 3>> faces(kFaces);
+  for (auto& f : faces) {
+    Eigen::Vector3d c(u(rng), u(rng), u(rng));
+    c = c.normalized() * (kFar ? 2.0 : 0.3) + Eigen::Vector3d(0, 0, 0.0);
+    if constexpr (std::is_same_v<Shape, drape::Plane>) c.z() = kFar ? 2.0 : 0.002 * u(rng);
+    for (auto& p : f) p = (c + 0.02 * Eigen::Vector3d(u(rng), u(rng), u(rng))).cast<S>();
+  }
+  drape::FaceQuery<S> q;
+  for (auto _ : state)
+    for (const auto& f : faces) {
+      benchmark::DoNotOptimize(drape::queryFace<true>(sdf, f[0], f[1], f[2], S(0.005), 12, q));
+      benchmark::DoNotOptimize(q);
+    }
+  perItem(state, kFaces);
+}
+
+/// Contact response (split, no friction / with friction) and one ring of propagation on a 50x80 cloth whose
+/// middle third rests on a floor.
+template <class S, bool kFriction> void respondAndPropagate(benchmark::State& state) {
+  const auto asset = grid<S>(50, 80);
+  const Index n = asset->vertexCount();
+  std::vector<drape::Vec3<S>> x(asset->restPositions), x0(x), v(n, drape::Vec3<S>(0.1, 0, -0.2));
+  const std::vector<S> w(n, S(10));
+  drape::ContactBuffer<S> contacts;
+  contacts.resize(n);
+  drape::PropagationBuffer<S> propagation;
+  propagation.resize(n);
+  drape::SolidMotion<S> motion{drape::Vec3<S>::Zero(), drape::Vec3<S>::Zero(), drape::Vec3<S>::Zero(),
+                               S(kFriction ? 0.3 : 0), S(kFriction ? 0.3 : 0)};
+  const bool propagate = state.range(0) == 1;
+  Index live = 0;
+  for (auto _ : state) {
+    state.PauseTiming();
+    contacts.begin();
+    live = 0;
+    for (Index i = n / 3; i < 2 * n / 3; ++i, ++live) {
+      contacts.record(i, x[i], drape::Vec3<S>::UnitZ(), drape::Vec3<S>::Zero(), S(1e-4), motion);
+      contacts.normalDv[i] = S(0.2);  // what the response would have removed: the source of propagation
+    }
+    for (auto& vi : v) vi = drape::Vec3<S>(0.1, 0, -0.2);
+    state.ResumeTiming();
+    if (propagate)
+      drape::propagateCorrections(contacts, propagation, asset->vertexNeighbours, v.data(), w.data(), S(0.5), 1);
+    else
+      drape::respondContacts<kFriction>(contacts, x.data(), x0.data(), v.data(), S(1.0 / 300), S(1));
+    benchmark::ClobberMemory();
+  }
+  perItem(state, propagate ? double(n) : double(live));
+}
+
+BENCHMARK(distanceSet<float>)->ArgName("set")->DenseRange(0, 2);
+BENCHMARK(distanceSet<double>)->ArgName("set")->DenseRange(0, 2);
+BENCHMARK(faceQuery<drape::Plane, float, false>);
+BENCHMARK(faceQuery<drape::Sphere, float, false>);
+BENCHMARK(faceQuery<drape::Box, float, false>);
+BENCHMARK(faceQuery<drape::Capsule, float, false>);
+BENCHMARK(faceQuery<drape::Sphere, float, true>);  // culled
+BENCHMARK(faceQuery<drape::Sphere, double, false>);
+BENCHMARK(respondAndPropagate<float, false>)->ArgName("propagate")->DenseRange(0, 1);
+BENCHMARK(respondAndPropagate<float, true>)->ArgName("propagate")->Arg(0);
+
+}  // namespace
+
+BENCHMARK_MAIN();
