@@ -6,6 +6,8 @@
 
 #include <catch2/catch.hpp>
 
+#include "stability_helpers.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -15,37 +17,7 @@
 
 namespace {
 
-using V3 = Eigen::Vector3d;
-constexpr double kG = 9.81;
-
-/// Rounding of E (see test_stability.cpp): M (v_max eps / h + g eps) (1 m).
-template <class S> double energyTolerance(double mass, double maxSpeed, double h) {
-  const double eps = std::numeric_limits<S>::epsilon();
-  return mass * (maxSpeed * eps / h + kG * eps);
-}
-
-template <class S> const char* name() { return std::is_same_v<S, float> ? "float" : "double"; }
-
-/// Kinetic plus gravitational potential energy (J) of the free vertices, heights measured from `ref`.
-template <class Solver> double mechanicalEnergy(const Solver& s, const V3& ref = V3::Zero()) {
-  const auto& st = s.state();
-  const V3 g = s.settings().gravity;
-  const V3 shift = st.origin - ref;
-  double e = 0;
-  for (std::size_t i = 0; i < st.x.size(); ++i) {
-    if (st.invMass[i] == 0) continue;
-    const double m = 1.0 / double(st.invMass[i]);
-    e += m * (0.5 * st.v[i].template cast<double>().squaredNorm() - g.dot(shift + st.x[i].template cast<double>()));
-  }
-  return e;
-}
-
-template <class Solver> double freeMass(const Solver& s) {
-  double m = 0;
-  for (auto w : s.state().invMass)
-    if (w != 0) m += 1.0 / double(w);
-  return m;
-}
+using namespace stability;
 
 /// Lowest signed distance of any vertex to any solid (m), from the solver's compiled solids.
 template <class Solver> double minVertexPhi(const Solver& s) {
@@ -89,12 +61,6 @@ struct Watch {
 template <class Solver> void runFor(Solver& solver, double dt, double seconds, Watch& watch) {
   const int frames = int(seconds / dt + 0.5);
   for (int f = 0; f < frames && watch.finite; ++f) solver.step(dt, [&](const Solver& s) { watch(s); });
-}
-
-template <class Solver> double meanSpeedNow(const Solver& s) {
-  double v = 0;
-  for (const auto& u : s.state().v) v += double(u.norm());
-  return v / double(s.vertexCount());
 }
 
 template <class S> std::shared_ptr<const drape::ClothAsset<S>> gridAsset(int n, double spacing, const V3& at) {

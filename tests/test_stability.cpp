@@ -20,6 +20,8 @@
 
 #include <catch2/catch.hpp>
 
+#include "stability_helpers.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -28,29 +30,7 @@
 
 namespace {
 
-using V3 = Eigen::Vector3d;
-
-/// Kinetic plus gravitational potential energy (J) of the free vertices, heights measured from `ref`.
-template <class Solver> double mechanicalEnergy(const Solver& s, const V3& ref = V3::Zero()) {
-  const auto& st = s.state();
-  const V3 g = s.settings().gravity;
-  const V3 shift = st.origin - ref;
-  double e = 0;
-  for (std::size_t i = 0; i < st.x.size(); ++i) {
-    if (st.invMass[i] == 0) continue;  // pinned: does not move, infinite mass
-    const double m = 1.0 / double(st.invMass[i]);
-    const V3 v = st.v[i].template cast<double>();
-    e += m * (0.5 * v.squaredNorm() - g.dot(shift + st.x[i].template cast<double>()));
-  }
-  return e;
-}
-
-template <class Solver> double freeMass(const Solver& s) {
-  double m = 0;
-  for (auto w : s.state().invMass)
-    if (w != 0) m += 1.0 / double(w);
-  return m;
-}
+using namespace stability;
 
 template <class Solver> double lightestFreeMass(const Solver& s) {
   double m = std::numeric_limits<double>::infinity();
@@ -94,26 +74,9 @@ template <class Solver> double maxSpeedNow(const Solver& s) {
   for (const auto& u : s.state().v) v = std::max(v, double(u.norm()));
   return v;
 }
-template <class Solver> double meanSpeedNow(const Solver& s) {
-  double v = 0;
-  for (const auto& u : s.state().v) v += double(u.norm());
-  return v / double(s.vertexCount());
-}
-
-template <class S> const char* name() { return std::is_same_v<S, float> ? "float" : "double"; }
-
 /// Free fall from the start height h0 to the floor: sqrt(2 g h0). A cloth's edge can whip faster than its
 /// centre of mass, but only by trading energy with the rest of the cloth; this factor is the whip allowance.
 constexpr double kWhip = 2.0;
-constexpr double kG = 9.81;
-
-/// Rounding of E: positions within 1 m of the local origin carry a relative error eps, and the velocity
-/// update v = (x - x_prev) / h turns it into a velocity error of eps * 1 m / h, so E is known to
-/// M (v_max eps / h + g eps) (1 m). In float at 200 substeps (h = 83 us) that is 3e-5 J for a 9 g cloth.
-template <class S> double energyTolerance(double mass, double maxSpeed, double h) {
-  const double eps = std::numeric_limits<S>::epsilon();
-  return mass * (maxSpeed * eps / h + kG * eps);
-}
 
 struct RunFigures {
   double maxSpeed = 0;    ///< m/s, over the whole run
