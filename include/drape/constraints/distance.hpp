@@ -35,9 +35,10 @@ inline void solveDistance(Index a, Index b, S rest, S alphaTilde, S* lambda, Vec
 }  // namespace detail
 
 /// One pass over `set`. alphaTilde = compliance / h^2; lambda holds the accumulated multipliers of this
-/// substep (zeroed at its start), one per constraint. kLambda false drops the multipliers: exact when they
-/// cannot matter, i.e. for rigid constraints (alphaTilde 0) or a single pass per substep (lambda is 0 on
-/// entry and never read again), and it saves a load, a store and a multiply per constraint.
+/// substep (zeroed at its start), one per constraint; it may be null when kLambda is false. kLambda false drops
+/// the multipliers: exact when they cannot matter, i.e. for rigid constraints (alphaTilde 0) or a single pass
+/// per substep (lambda is 0 on entry and never read again), and it saves a load, a store and a multiply per
+/// constraint.
 /// Constraints of one colour share no vertex, so each colour is a work-shared loop when called inside a
 /// parallel region; the implicit barrier after it orders the colours. (Four-lane SIMD blocks with gathered
 /// and scattered positions measured no faster than this scalar loop: the gathers cost what the packets save.)
@@ -50,7 +51,8 @@ void solveDistanceSet(const DistanceSet<S>& set, S alphaTilde, S* lambda, Vec3<S
     const Index begin = set.colourOffsets[c], end = set.colourOffsets[c + 1];
     DRAPE_OMP(for schedule(static))
     for (Index k = begin; k < end; ++k)
-      detail::solveDistance<kLambda>(pairs[k][0], pairs[k][1], rest[k], alphaTilde, lambda + k, x, invMass);
+      detail::solveDistance<kLambda>(pairs[k][0], pairs[k][1], rest[k], alphaTilde, kLambda ? lambda + k : nullptr,
+                                     x, invMass);
   }
 }
 
