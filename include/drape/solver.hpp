@@ -243,18 +243,24 @@ template <Scalar S, class... Shapes> class BasicSolver {
     const S* w = state_.invMass.data();
     const ClothAsset<S>& a = *asset_;
 
-    // 1. predict
+    // 1. predict (the start positions are kept only for friction, their one reader)
     const Vec3<S> gh = (settings_.gravity * double(h)).template cast<S>();
     Vec3<S>* xp = xPredicted_.data();
-    DRAPE_OMP(for schedule(static))
-    for (Index i = 0; i < n; ++i) {
-      x0[i] = x[i];
-      if (w[i] != S(0)) {
-        v[i] += gh;
-        x[i] += h * v[i];
+    auto predict = [&](auto keepStart) {
+      DRAPE_OMP(for schedule(static))
+      for (Index i = 0; i < n; ++i) {
+        if constexpr (decltype(keepStart)::value) x0[i] = x[i];
+        if (w[i] != S(0)) {
+          v[i] += gh;
+          x[i] += h * v[i];
+        }
+        xp[i] = x[i];
       }
-      xp[i] = x[i];
-    }
+    };
+    if (hasFriction_)
+      predict(std::true_type{});
+    else
+      predict(std::false_type{});
 
     // 2. solve
     const S h2 = h * h;

@@ -15,7 +15,10 @@ inline void solveDistance(Index a, Index b, S rest, S alphaTilde, S* lambda, Vec
   const S wa = invMass[a], wb = invMass[b];
   S* pa = x[a].data();
   S* pb = x[b].data();
-  const S dx = pa[0] - pb[0], dy = pa[1] - pb[1], dz = pa[2] - pb[2];
+  // Every coordinate is read before any is written: a and b differ, but the compiler cannot know it and would
+  // reload b after storing a.
+  const S ax = pa[0], ay = pa[1], az = pa[2], bx = pb[0], by = pb[1], bz = pb[2];
+  const S dx = ax - bx, dy = ay - by, dz = az - bz;
   const S len = std::sqrt(dx * dx + dy * dy + dz * dz);
   const S denom = wa + wb + alphaTilde;
   if (!(denom > S(0) && len > S(0))) return;  // both fixed and rigid, or coincident: no direction
@@ -28,8 +31,8 @@ inline void solveDistance(Index a, Index b, S rest, S alphaTilde, S* lambda, Vec
     s = (rest - len) / (denom * len);
   }
   const S sa = wa * s, sb = wb * s;
-  pa[0] += sa * dx, pa[1] += sa * dy, pa[2] += sa * dz;
-  pb[0] -= sb * dx, pb[1] -= sb * dy, pb[2] -= sb * dz;
+  pa[0] = ax + sa * dx, pa[1] = ay + sa * dy, pa[2] = az + sa * dz;
+  pb[0] = bx - sb * dx, pb[1] = by - sb * dy, pb[2] = bz - sb * dz;
 }
 
 }  // namespace detail
