@@ -1,0 +1,40 @@
+#pragma once
+// The coupling interface: what the cloth solver needs from a rigid body, whoever simulates it. drape's own
+// bodies (rigid/body.hpp) implement it; an application that already has a rigid-body engine wraps each of its
+// bodies in a small class implementing it and hands those to the cloth solver instead.
+//
+// Per substep the cloth solver calls, for each coupled body (never per vertex): pose(), linearVelocity(),
+// angularVelocity() to place and move the body's solid; then, for the contacts it resolved, applyForceAtPoint()
+// with the reaction forces (thesis chapter 5.2: the force on the particle, reversed). The engine integrates
+// the accumulated force and torque in its next (sub)step and clears them. inverseMass() and
+// inverseInertiaWorld() let a solver weigh a contact between cloth and body (0 for a kinematic body).
+
+#include <drape/math.hpp>
+
+namespace drape {
+
+class CoupledBody {
+ public:
+  virtual ~CoupledBody() = default;
+
+  /// Pose of the body frame, whose origin is the centre of mass (m, world).
+  virtual Pose pose() const = 0;
+  /// Velocity of the centre of mass (m/s, world).
+  virtual Eigen::Vector3d linearVelocity() const = 0;
+  /// Angular velocity (rad/s, world axes).
+  virtual Eigen::Vector3d angularVelocity() const = 0;
+  /// 1 / mass (1/kg); 0 for a body that forces do not move (kinematic, static).
+  virtual double inverseMass() const = 0;
+  /// Inverse inertia tensor about the centre of mass in world axes (1/(kg m^2)); 0 where forces do not turn it.
+  virtual Eigen::Matrix3d inverseInertiaWorld() const = 0;
+  /// Adds a force (N, world) acting at a world point (m) to what the next integration applies: the force
+  /// itself and the torque (point - centre of mass) x force. Throws drape::Error if either is not finite.
+  virtual void applyForceAtPoint(const Eigen::Vector3d& force, const Eigen::Vector3d& point) = 0;
+
+  /// Velocity of the body's material point at `point` (m/s): v + w x (point - centre of mass).
+  Eigen::Vector3d velocityAt(const Eigen::Vector3d& point) const {
+    return linearVelocity() + angularVelocity().cross(point - pose().position);
+  }
+};
+
+}  // namespace drape

@@ -1,0 +1,506 @@
+#pragma once
+// A world of rigid bodies stepped in substeps, like the cloth (DESIGN.md sections 1 and 7). Needs libccd
+// (link drape::rigid).
+//
+// Contacts are resolved with extended position-based dynamics (XPBD) for rigid bodies, after Mueller et al.
+// 2020, "Detailed Rigid Body Simulation with Extended Position Based Dynamics": per substep, positional
+// non-penetration, then a velocity pass for restitution and friction. It is the same substep loop as the
+// cloth's, so the cloth solver can interleave the two substep by substep, and with small substeps it keeps
+// resting contact and stacks still without warm starting or many iterations, which sequential impulses need.
+// Where we depart from the paper (friction, steps 5 and 6), step 6 says why (measured while building this).
+//
+// Each substep, in this order:
+//   1. integrate: v += h (g + F / m); w by Euler's equations (body frame, implicit midpoint: a torque-free body
+//      keeps its kinetic energy and the magnitude of its angular momentum); x += h v; q = q exp(h w_mid / 2).
+//      Kinematic bodies move by their given velocities.
+//   2. detect: bounding boxes, sweep and prune, libccd MPR per overlapping pair and per body near the ground,
+//      a manifold of up to four points per pair (narrowphase.hpp).
+//   3. solve positions (iterationCount passes): per point, push the bodies apart along the normal (XPBD with
+//      zero compliance, generalised inverse masses with the rotational terms).
+//   4. velocities from positions: v = v_integrated + (x - x_integrated) / h, and the same for the rotation.
+//   5. solve velocities: restitution per point (normal velocity set to -e times the one before the solve;
+//      e = 0 below 2 |g| h so resting contact does not bounce); Coulomb friction per manifold at its centre,
+//      and about its normal (twist): stop the sliding if that takes at most staticFriction times the
+//      manifold's normal impulse, else brake with dynamicFriction times it.
+//   6. hold: a manifold that stuck has its centre's tangential displacement over the substep undone (bodies
+//      translated, velocities untouched), so a body that should stick does not creep by h^2 F / m per
+//      substep. The paper's positional static friction per point made stacks of three tremble at cm/s.
+
+#include <drape/rigid/body.hpp>
+#include <drape/rigid/broadphase.hpp>
+#include <drape/rigid/narrowphase.hpp>
+
+#include <deque>
+#include <string>
+#include <vector>
+
+namespace drape {
+
+struct RigidSettings {
+  int subStepCount = 10;                 ///< substeps per step(dt); h = dt / subStepCount
+  int iterationCount = 1;                ///< passes of the position solve over the contacts per substep
+  Eigen::Vector3d gravity{0, 0, -9.81};  ///< m/s^2
+  bool ground = true;                    ///< a ground plane z = groundHeight, normal +z
+  double groundHeight = 0;               ///< m
+  double groundStaticFriction = 0.5;     ///< combined with a body's as sqrt(a b)
+  double groundDynamicFriction = 0.5;    ///< combined with a body's as sqrt(a b)
+  double groundRestitution = 0;          ///< combined with a body's as max(a, b)
+  /// m: manifold points this far apart are kept with the overlapping ones; they push only once they touch
+  /// within the substep, which keeps a landing face from hitting on one corner first.
+  double contactMargin = 0.01;
+
+  void validate() const {
+    using detail::require;
+    require(subStepCount >= 1 && subStepCount <= 10000,
+            "subStepCount must be in [1, 10000] (got " + std::to_string(subStepCount) + ")");
+    require(iterationCount >= 1 && iterationCount <= 1000,
+            "iterationCount must be in [1, 1000] (got " + std::to_string(iterationCount) + ")");
+    require(detail::allFinite(gravity), "gravity must be finite");
+    detail::requireFinite(groundHeight, "groundHeight");
+    detail::requireRange(groundStaticFriction, 0, 1e3, "groundStaticFriction");
+    detail::requireRange(groundDynamicFriction, 0, 1e3, "groundDynamicFriction");
+    detail::requireRange(groundRestitution, 0, 1, "groundRestitution");
+    detail::requireRange(contactMargin, 0, 1, "contactMargin");
+  }
+};
+
+/// A contact manifold of the last substep, between bodies `first` and `second` (`first` is kGround for the
+/// ground). The normal points from first to second.
+struct RigidContact {
+  struct Point {
+    Eigen::Vector3d localFirst;   ///< contact point on `first`, its body frame (world for the ground)
+    Eigen::Vector3d localSecond;  ///< contact point on `second`, its body frame
+    double depth = 0;             ///< m, at detection
+    double lambdaNormal = 0;      ///< kg m: normal position multiplier of this substep (lambda / h^2 is a force)
+    double normalVelocityBefore = 0;  ///< m/s, relative normal velocity before the solve (> 0 separating)
+  };
+  int first = -1;
+  int second = -1;
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
+  int count = 0;
+  std::array<Point, 4> points;
+  double staticFriction = 0;
+  double dynamicFriction = 0;
+  double restitution = 0;
+  double lambdaTangent = 0;  ///< kg m: static friction multiplier of the manifold in this substep
+  bool sticking = false;     ///< static friction held it in this substep
+};
+
+class RigidWorld {
+ public:
+  static constexpr int kGround = -1;
+
+  explicit RigidWorld(const RigidSettings& settings = {}) {
+    settings.validate();
+    settings_ = settings;
+  }
+
+  const RigidSettings& settings() const { return settings_; }
+  void setSettings(const RigidSettings& settings) {
+    settings.validate();
+    settings_ = settings;
+  }
+
+  /// Adds a body and returns its index. References to bodies stay valid as bodies are added.
+  int add(const BodyDesc& desc) {
+    const int index = static_cast<int>(bodies_.size());
+    bodies_.emplace_back(desc, "body " + std::to_string(index));
+    return index;
+  }
+
+  int bodyCount() const { return static_cast<int>(bodies_.size()); }
+  RigidBody& body(int i) { return bodies_.at(static_cast<std::size_t>(i)); }
+  const RigidBody& body(int i) const { return bodies_.at(static_cast<std::size_t>(i)); }
+
+  /// Advances by dt seconds in settings().subStepCount substeps. Forces and torques applied before the call
+  /// act over the whole step, then are cleared.
+  void step(double dt) {
+    detail::require(std::isfinite(dt) && dt > 0, "step: dt must be positive and finite (got " + std::to_string(dt) + ")");
+    validateBodies();
+    const double h = dt / settings_.subStepCount;
+    for (int s = 0; s < settings_.subStepCount; ++s) advance(h);
+    for (auto& b : bodies_) b.clearForces();
+  }
+
+  /// Advances by one substep of h seconds. Forces and torques applied before the call act over it, then are
+  /// cleared: a cloth solver applies its contact forces every substep, then calls this.
+  void subStep(double h) {
+    detail::require(std::isfinite(h) && h > 0, "subStep: h must be positive and finite (got " + std::to_string(h) + ")");
+    validateBodies();
+    advance(h);
+    for (auto& b : bodies_) b.clearForces();
+  }
+
+  /// Contact manifolds found in the last substep, with the multipliers of its solve.
+  const std::vector<RigidContact>& contacts() const { return contacts_; }
+
+  /// Total linear momentum of the dynamic bodies (kg m/s).
+  Eigen::Vector3d linearMomentum() const {
+    Eigen::Vector3d p = Eigen::Vector3d::Zero();
+    for (const auto& b : bodies_)
+      if (b.isDynamic()) p += b.massProperties().mass * b.state.linearVelocity;
+    return p;
+  }
+  /// Total angular momentum of the dynamic bodies about `point` (kg m^2/s).
+  Eigen::Vector3d angularMomentum(const Eigen::Vector3d& point = Eigen::Vector3d::Zero()) const {
+    Eigen::Vector3d l = Eigen::Vector3d::Zero();
+    for (const auto& b : bodies_) {
+      if (!b.isDynamic()) continue;
+      const Eigen::Matrix3d R = b.state.pose.rotation.toRotationMatrix();
+      l += (b.state.pose.position - point).cross(b.massProperties().mass * b.state.linearVelocity) +
+           R * b.massProperties().inertia * R.transpose() * b.state.angularVelocity;
+    }
+    return l;
+  }
+  /// Total kinetic energy of the dynamic bodies (J).
+  double kineticEnergy() const {
+    double e = 0;
+    for (const auto& b : bodies_) {
+      if (!b.isDynamic()) continue;
+      const Eigen::Vector3d wb = b.state.pose.rotation.conjugate() * b.state.angularVelocity;
+      e += 0.5 * b.massProperties().mass * b.state.linearVelocity.squaredNorm() +
+           0.5 * wb.dot(b.massProperties().inertia * wb);
+    }
+    return e;
+  }
+
+ private:
+  struct Scratch {  // per body, per substep
+    Eigen::Vector3d previousPosition, predictedPosition, integratedVelocity, integratedAngularVelocity;
+    Eigen::Quaterniond previousRotation, predictedRotation;
+    Eigen::Matrix3d invInertiaWorld;  // at the start of the solve
+  };
+
+  void validateBodies() const {
+    for (std::size_t i = 0; i < bodies_.size(); ++i) bodies_[i].validateState("body " + std::to_string(i));
+  }
+
+  static Eigen::Quaterniond expMap(const Eigen::Vector3d& rotationVector) {
+    const double angle = rotationVector.norm();
+    if (angle == 0) return Eigen::Quaterniond::Identity();
+    return Eigen::Quaterniond(Eigen::AngleAxisd(angle, rotationVector / angle));
+  }
+  static Eigen::Vector3d logMap(Eigen::Quaterniond q) {
+    if (q.w() < 0) q.coeffs() = -q.coeffs();
+    const double s = q.vec().norm();
+    if (s == 0) return Eigen::Vector3d::Zero();
+    return q.vec() * (2 * std::atan2(s, q.w()) / s);
+  }
+  static Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
+    Eigen::Matrix3d m;
+    m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+    return m;
+  }
+
+  void integrate(double h) {
+    scratch_.resize(bodies_.size());
+    for (std::size_t i = 0; i < bodies_.size(); ++i) {
+      RigidBody& b = bodies_[i];
+      Scratch& s = scratch_[i];
+      BodyState& st = b.state;
+      s.previousPosition = st.pose.position;
+      s.previousRotation = st.pose.rotation;
+      if (b.isDynamic()) {
+        const MassProperties& m = b.massProperties();
+        st.linearVelocity += h * (settings_.gravity + b.accumulatedForce() / m.mass);
+        // Euler's equations in the body frame by the implicit midpoint rule, I (w1 - w0) + h wm x (I wm) = h tau
+        // with wm = (w0 + w1) / 2, solved by Newton's method from the explicit guess. The midpoint rule keeps
+        // the quadratic invariants w.Iw and |Iw| of the torque-free motion; explicit Euler would gain energy.
+        const Eigen::Matrix3d R = st.pose.rotation.toRotationMatrix();
+        const Eigen::Matrix3d& I = m.inertia;
+        const Eigen::Vector3d w0 = R.transpose() * st.angularVelocity;
+        const Eigen::Vector3d tau = R.transpose() * b.accumulatedTorque();
+        Eigen::Vector3d w1 = w0 + h * b.inverseInertiaBody() * (tau - w0.cross(I * w0));
+        for (int it = 0; it < 4; ++it) {
+          const Eigen::Vector3d wm = 0.5 * (w0 + w1), Iwm = I * wm;
+          const Eigen::Vector3d f = I * (w1 - w0) + h * wm.cross(Iwm) - h * tau;
+          if (f.norm() <= 1e-15 * (I * w1).norm()) break;
+          const Eigen::Matrix3d J = I + 0.5 * h * (skew(wm) * I - skew(Iwm));
+          w1 -= J.inverse() * f;
+        }
+        st.pose.position += h * st.linearVelocity;
+        st.pose.rotation = (st.pose.rotation * expMap(0.5 * h * (w0 + w1))).normalized();
+        st.angularVelocity = st.pose.rotation * w1;
+      } else {
+        st.pose.position += h * st.linearVelocity;
+        st.pose.rotation = (expMap(h * st.angularVelocity) * st.pose.rotation).normalized();
+      }
+      s.predictedPosition = st.pose.position;
+      s.predictedRotation = st.pose.rotation;
+      s.integratedVelocity = st.linearVelocity;
+      s.integratedAngularVelocity = st.angularVelocity;
+      s.invInertiaWorld = b.inverseInertiaWorld();
+    }
+  }
+
+  void detect() {
+    const int n = bodyCount();
+    contacts_.clear();
+    boxes_.resize(n);
+    rotations_.resize(n);
+    for (int i = 0; i < n; ++i) {
+      const RigidBody& b = bodies_[i];
+      rotations_[i] = b.state.pose.rotation.toRotationMatrix();
+      boxes_[i] = detail::worldAabb(b.shape(), rotations_[i], b.state.pose.position);
+    }
+    broadPhase_.findPairs(boxes_, pairs_, [&](int i, int j) { return !bodies_[i].isDynamic() && !bodies_[j].isDynamic(); });
+    Manifold m;
+    const double margin = settings_.contactMargin;
+    if (settings_.ground) {
+      for (int i = 0; i < n; ++i) {
+        const RigidBody& b = bodies_[i];
+        if (!b.isDynamic() || boxes_[i].min.z() > settings_.groundHeight) continue;
+        if (!collideGround(b.shape(), rotations_[i], b.state.pose.position, settings_.groundHeight, margin, m)) continue;
+        addContact(kGround, i, m, settings_.groundStaticFriction, settings_.groundDynamicFriction,
+                   settings_.groundRestitution);
+      }
+    }
+    for (const auto& [i, j] : pairs_) {
+      const RigidBody& a = bodies_[i];
+      const RigidBody& b = bodies_[j];
+      if (!collide(a.shape(), rotations_[i], a.state.pose.position, b.shape(), rotations_[j], b.state.pose.position,
+                   margin, m))
+        continue;
+      addContact(i, j, m, a.staticFriction, a.dynamicFriction, a.restitution);
+    }
+  }
+
+  void addContact(int first, int second, const Manifold& m, double staticFriction, double dynamicFriction,
+                  double restitution) {
+    const RigidBody& b = bodies_[second];
+    RigidContact c;
+    c.first = first;
+    c.second = second;
+    c.normal = m.normal;
+    c.count = m.count;
+    c.staticFriction = std::sqrt(staticFriction * b.staticFriction);
+    c.dynamicFriction = std::sqrt(dynamicFriction * b.dynamicFriction);
+    c.restitution = std::max(restitution, b.restitution);
+    for (int k = 0; k < m.count; ++k) {
+      RigidContact::Point& p = c.points[k];
+      p.localFirst = toLocal(first, m.points[k].pointA);
+      p.localSecond = toLocal(second, m.points[k].pointB);
+      p.depth = m.points[k].depth;
+      p.normalVelocityBefore =
+          c.normal.dot(velocityAt(second, m.points[k].pointB) - velocityAt(first, m.points[k].pointA));
+    }
+    contacts_.push_back(c);
+  }
+
+  // --- Per-body helpers; index kGround is the static ground, whose local frame is the world. ----------------
+  bool movable(int i) const { return i != kGround && bodies_[i].isDynamic(); }
+  Eigen::Vector3d toLocal(int i, const Eigen::Vector3d& p) const {
+    if (i == kGround) return p;
+    const Pose& pose = bodies_[i].state.pose;
+    return pose.rotation.conjugate() * (p - pose.position);
+  }
+  Eigen::Vector3d toWorld(int i, const Eigen::Vector3d& local) const {
+    return i == kGround ? local : bodies_[i].state.pose.apply(local);
+  }
+  Eigen::Vector3d previousWorld(int i, const Eigen::Vector3d& local) const {
+    return i == kGround ? local : scratch_[i].previousRotation * local + scratch_[i].previousPosition;
+  }
+  Eigen::Vector3d velocityAt(int i, const Eigen::Vector3d& p) const {
+    if (i == kGround) return Eigen::Vector3d::Zero();
+    const BodyState& s = bodies_[i].state;
+    return s.linearVelocity + s.angularVelocity.cross(p - s.pose.position);
+  }
+  /// Generalised inverse mass of body i at world point p in unit direction d.
+  double inverseMassAt(int i, const Eigen::Vector3d& p, const Eigen::Vector3d& d) const {
+    if (!movable(i)) return 0;
+    const Eigen::Vector3d rn = (p - bodies_[i].state.pose.position).cross(d);
+    return bodies_[i].inverseMass() + rn.dot(scratch_[i].invInertiaWorld * rn);
+  }
+  /// Moves body i by a positional impulse P (kg m) at world point p.
+  void applyPositionImpulse(int i, const Eigen::Vector3d& P, const Eigen::Vector3d& p) {
+    if (!movable(i)) return;
+    Pose& pose = bodies_[i].state.pose;
+    const Eigen::Vector3d dw = scratch_[i].invInertiaWorld * (p - pose.position).cross(P);
+    pose.position += P * bodies_[i].inverseMass();
+    Eigen::Quaterniond dq(0, 0.5 * dw.x(), 0.5 * dw.y(), 0.5 * dw.z());
+    pose.rotation.coeffs() += (dq * pose.rotation).coeffs();
+    pose.rotation.normalize();
+  }
+  /// Changes body i's velocities by an impulse J (kg m/s) at world point p.
+  void applyVelocityImpulse(int i, const Eigen::Vector3d& J, const Eigen::Vector3d& p) {
+    if (!movable(i)) return;
+    BodyState& s = bodies_[i].state;
+    s.linearVelocity += J * bodies_[i].inverseMass();
+    s.angularVelocity += scratch_[i].invInertiaWorld * (p - s.pose.position).cross(J);
+  }
+
+  void solvePositions() {
+    for (auto& c : contacts_)
+      for (int k = 0; k < c.count; ++k) c.points[k].lambdaNormal = 0;
+    for (int it = 0; it < settings_.iterationCount; ++it)
+      for (auto& c : contacts_) solveContactPositions(c);
+  }
+
+  void solveContactPositions(RigidContact& c) {
+    const Eigen::Vector3d& n = c.normal;
+    for (int k = 0; k < c.count; ++k) {
+      RigidContact::Point& q = c.points[k];
+      const Eigen::Vector3d pa = toWorld(c.first, q.localFirst), pb = toWorld(c.second, q.localSecond);
+      const double d = (pa - pb).dot(n);
+      if (d <= 0) continue;
+      const double w = inverseMassAt(c.first, pa, n) + inverseMassAt(c.second, pb, n);
+      if (w <= 0) continue;
+      const double dl = d / w;
+      q.lambdaNormal += dl;
+      applyPositionImpulse(c.first, -dl * n, pa);
+      applyPositionImpulse(c.second, dl * n, pb);
+    }
+  }
+
+  void updateVelocities(double h) {
+    for (std::size_t i = 0; i < bodies_.size(); ++i) {
+      RigidBody& b = bodies_[i];
+      if (!b.isDynamic()) continue;
+      const Scratch& s = scratch_[i];
+      b.state.linearVelocity = s.integratedVelocity + (b.state.pose.position - s.predictedPosition) / h;
+      b.state.angularVelocity =
+          s.integratedAngularVelocity + logMap(b.state.pose.rotation * s.predictedRotation.conjugate()) / h;
+    }
+  }
+
+  /// Velocity pass, per manifold: restitution per point, then friction at the manifold's centre (its points
+  /// weighted by their normal multipliers) with the manifold's normal impulse, plus torsional friction about
+  /// the normal (lever: the points' mean distance from the centre). One friction impulse per manifold instead
+  /// of one per point: per point, a corner with a small share of the load slips while its neighbours stick,
+  /// and the box creeps. Each impulse acts on both bodies at one point, so momentum and angular momentum are
+  /// exchanged, not made.
+  void solveVelocities(double h) {
+    const double restingSpeed = 2 * settings_.gravity.norm() * h;
+    for (auto& c : contacts_) {
+      const Eigen::Vector3d& n = c.normal;
+      c.sticking = false;
+      double lambdaN = 0, velocityImpulse = 0;
+      Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+      for (int k = 0; k < c.count; ++k) {
+        const RigidContact::Point& q = c.points[k];
+        if (q.lambdaNormal <= 0) continue;
+        const Eigen::Vector3d m = 0.5 * (toWorld(c.first, q.localFirst) + toWorld(c.second, q.localSecond));
+        lambdaN += q.lambdaNormal;
+        centre += q.lambdaNormal * m;
+        const Eigen::Vector3d v = velocityAt(c.second, m) - velocityAt(c.first, m);
+        const double e = std::abs(q.normalVelocityBefore) <= restingSpeed ? 0.0 : c.restitution;
+        const double target = std::max(-e * q.normalVelocityBefore, 0.0);
+        const double w = inverseMassAt(c.first, m, n) + inverseMassAt(c.second, m, n);
+        if (w <= 0) continue;
+        const double impulse = (target - v.dot(n)) / w;
+        velocityImpulse += impulse;
+        applyVelocityImpulse(c.first, -impulse * n, m);
+        applyVelocityImpulse(c.second, impulse * n, m);
+      }
+      if (lambdaN <= 0) continue;
+      centre /= lambdaN;
+      // The substep's normal impulse: the position pass's lambda / h and what the velocity pass added.
+      const double normalImpulse = std::max(lambdaN / h + velocityImpulse, 0.0);
+
+      // Sliding at the centre.
+      const Eigen::Vector3d v = velocityAt(c.second, centre) - velocityAt(c.first, centre);
+      Eigen::Vector3d vt = v - v.dot(n) * n;
+      const double speedT = vt.norm();
+      bool stuck = true;
+      if (speedT > 0) {
+        vt /= speedT;
+        const double w = inverseMassAt(c.first, centre, vt) + inverseMassAt(c.second, centre, vt);
+        if (w > 0) {
+          const double stop = speedT / w;
+          stuck = stop <= c.staticFriction * normalImpulse;
+          const double impulse = stuck ? stop : std::min(stop, c.dynamicFriction * normalImpulse);
+          applyVelocityImpulse(c.first, impulse * vt, centre);
+          applyVelocityImpulse(c.second, -impulse * vt, centre);
+        }
+      }
+      // Twisting about the normal.
+      if (c.count > 1) {
+        double lever = 0;
+        for (int k = 0; k < c.count; ++k) {
+          const RigidContact::Point& q = c.points[k];
+          if (q.lambdaNormal <= 0) continue;
+          const Eigen::Vector3d r = toWorld(c.second, q.localSecond) - centre;
+          lever += q.lambdaNormal * (r - r.dot(n) * n).norm();
+        }
+        lever /= lambdaN;
+        const double spin = n.dot(angularVelocityOf(c.second) - angularVelocityOf(c.first));
+        const double k = n.dot(inverseInertiaOf(c.first) * n) + n.dot(inverseInertiaOf(c.second) * n);
+        if (spin != 0 && k > 0) {
+          const double stop = std::abs(spin) / k;
+          const bool held = stop <= c.staticFriction * normalImpulse * lever;
+          stuck = stuck && held;
+          const double impulse = std::copysign(held ? stop : std::min(stop, c.dynamicFriction * normalImpulse * lever), spin);
+          applyAngularImpulse(c.first, impulse * n);
+          applyAngularImpulse(c.second, -impulse * n);
+        }
+      }
+      c.sticking = stuck;
+    }
+  }
+
+  Eigen::Vector3d angularVelocityOf(int i) const {
+    return i == kGround ? Eigen::Vector3d::Zero() : bodies_[i].state.angularVelocity;
+  }
+  Eigen::Matrix3d inverseInertiaOf(int i) const {
+    return movable(i) ? scratch_[i].invInertiaWorld : Eigen::Matrix3d::Zero();
+  }
+  void applyAngularImpulse(int i, const Eigen::Vector3d& L) {
+    if (movable(i)) bodies_[i].state.angularVelocity += scratch_[i].invInertiaWorld * L;
+  }
+
+  /// Static friction's position part: where the velocity pass found a manifold sticking, the relative
+  /// tangential displacement of its centre (its points weighted by their normal multipliers) over the substep
+  /// is undone too, so that a body that should stick does not creep by h times its tangential velocity gain
+  /// per substep. Positions only, and by translation only: the
+  /// velocities were settled by the velocity pass, and corrections at the contact points that also turned
+  /// the bodies (Mueller et al.'s positional static friction) tilted them and made stacks tremble.
+  void holdStickingContacts() {
+    for (auto& c : contacts_) {
+      c.lambdaTangent = 0;
+      double lambdaN = 0;
+      const bool sticking = c.sticking;
+      Eigen::Vector3d la = Eigen::Vector3d::Zero(), lb = Eigen::Vector3d::Zero();
+      for (int k = 0; k < c.count; ++k) {
+        const RigidContact::Point& q = c.points[k];
+        if (q.lambdaNormal <= 0) continue;
+        lambdaN += q.lambdaNormal;
+        la += q.lambdaNormal * q.localFirst, lb += q.lambdaNormal * q.localSecond;
+      }
+      if (!sticking || lambdaN <= 0) continue;
+      la /= lambdaN, lb /= lambdaN;
+      const Eigen::Vector3d& n = c.normal;
+      const Eigen::Vector3d dp = (toWorld(c.first, la) - previousWorld(c.first, la)) -
+                                 (toWorld(c.second, lb) - previousWorld(c.second, lb));
+      const Eigen::Vector3d dt = dp - dp.dot(n) * n;
+      const double wa = movable(c.first) ? bodies_[c.first].inverseMass() : 0;
+      const double wb = movable(c.second) ? bodies_[c.second].inverseMass() : 0;
+      if (wa + wb <= 0) continue;
+      // The velocity pass decided that the manifold sticks, with the generalised masses at its centre; the
+      // displacement undone here includes the tipping of the bodies about that centre, which the cone of the
+      // translation alone (m |dt| <= mu lambda) would wrongly count as slip.
+      c.lambdaTangent = dt.norm() / (wa + wb);
+      if (wa > 0) bodies_[c.first].state.pose.position -= dt * (wa / (wa + wb));
+      if (wb > 0) bodies_[c.second].state.pose.position += dt * (wb / (wa + wb));
+    }
+  }
+
+  void advance(double h) {
+    integrate(h);
+    detect();
+    solvePositions();
+    updateVelocities(h);
+    solveVelocities(h);
+    holdStickingContacts();
+  }
+
+  RigidSettings settings_{};
+  std::deque<RigidBody> bodies_;
+  std::vector<Scratch> scratch_;
+  std::vector<Aabb> boxes_;
+  std::vector<Eigen::Matrix3d> rotations_;
+  std::vector<std::pair<int, int>> pairs_;
+  std::vector<RigidContact> contacts_;
+  SweepAndPrune broadPhase_;
+};
+
+}  // namespace drape
