@@ -415,3 +415,83 @@ TEST_CASE("culling changes nothing in a simulation: positions and contacts are b
   CHECK(with.lastNormals == without.lastNormals);
   CHECK(with.contactLists == without.contactLists);
 }
+
+// ============================================================================================================
+// 4. Non-convex fields: the descent
+
+namespace {
+
+/// An exact torus SDF (ring radius R about the z axis, tube radius r) in the solver's field interface, declared
+/// non-convex: the saddle-shaped inner wall, the hole and the ring's two sides are what a grid SDF of a torus
+/// mesh presents to a face.
+template <class S> struct TorusField {
+  static constexpr bool kLinear = false;
+  static constexpr bool kConvex = false;
+  Vec3<S> centre;
+  S ringRadius, tubeRadius;
+  S operator()(const Vec3<S>& x, Vec3<S>& gradient) const {
+    const Vec3<S> p = x - centre;
+    const S rho = std::sqrt(p.x() * p.x() + p.y() * p.y());
+    const Vec3<S> radial = rho > S(0) ? Vec3<S>(p.x() / rho, p.y() / rho, 0) : Vec3<S>::UnitX();
+    const Vec3<S> d = p - ringRadius * radial;  // from the nearest point of the ring
+    const S len = d.norm();
+    gradient = len > S(0) ? Vec3<S>(d / len) : Vec3<S>::UnitZ();
+    return len - tubeRadius;
+  }
+};
+
+}  // namespace
+
+TEMPLATE_TEST_CASE("on a non-convex field the descent finds the deepest point of faces near a torus", "[pgd]", float,
+                   double) {
+  using S = TestType;
+  constexpr int kTriangles = 400, kGrid = 200;
+  const int iterations = drape::Settings{}.pgdIterations;
+  std::mt19937 rng(5);
+  for (const double tube : {0.1, 0.03}) {
+    const double ring = 0.25;
+    const TorusField<S> torus{(kWorld - kOrigin).cast<S>(), S(ring), S(tube)};
+    long long misses = 0, evaluations = 0;
+    double worst = -1;
+    for (int k = 0; k < kTriangles; ++k) {
+      // A point on the tube's surface (all around, the inner saddle included), then a little in or out.
+      const double u = uniform(rng, 0, 2 * std::numbers::pi), v = uniform(rng, 0, 2 * std::numbers::pi);
+      const double reach = k % 5 == 0 ? 0.02 : 0.008;
+      const double rr = tube + uniform(rng, -reach, reach);
+      const V3 p = kWorld + V3((ring + rr * std::cos(v)) * std::cos(u), (ring + rr * std::cos(v)) * std::sin(u),
+                               rr * std::sin(v));
+      const Tri tri = randomTriangle(rng, p, kEdge);
+      const auto x = toLocal<S>(tri, kOrigin);
+      drape::FaceQuery<S> q;
+      REQUIRE(drape::queryFace<false>(torus, x[0], x[1], x[2], S(0), iterations, q));
+      const S brute = bruteMinimum<S>(torus, x, kGrid);
+      const double edge = tri.meanEdge();
+      worst = std::max(worst, (double(q.phi) - double(brute)) / edge);
+      evaluations += q.evaluations;
+      if (double(q.phi) > double(brute) + 1e-3 * edge) {
+        ++misses;
+        // A miss is the budget running out, not a wrong basin: with three times the budget it is found.
+        drape::FaceQuery<S> longer;
+        drape::queryFace<false>(torus, x[0], x[1], x[2], S(0), 3 * iterations, longer);
+        CHECK(double(longer.phi) <= double(brute) + 1e-3 * edge);
+      }
+      CHECK(q.evaluations <= iterations);
+      CHECK((q.barycentric.array() >= S(0)).all());
+      CHECK(std::abs(double(q.barycentric.sum()) - 1) <= 1e-5);
+      Vec3<S> g;
+      CHECK(std::abs(double(torus(q.point, g) - q.phi)) <= 1e-6);
+      // Never worse than the face's centroid, which a descent starts from.
+      const Vec3<S> c = (x[0] + x[1] + x[2]) / S(3);
+      CHECK(q.phi <= torus(c, g));
+    }
+    std::printf("[pgd] %-6s torus tube %.2f: mean evaluations %.2f, worst (descent - brute) / edge %+.2e, missed "
+                "%lld of %d\n",
+                sizeof(S) == 4 ? "float" : "double", tube, double(evaluations) / kTriangles, worst, misses,
+                kTriangles);
+    // On a field this smooth at the scale of a face (tube radius 1.5 to 5 face edges), phi along a face has one
+    // minimum, which the descent finds within the default budget on at least 99 % of faces, and never more than
+    // a hundredth of an edge short of it.
+    CHECK(misses <= kTriangles / 100);
+    CHECK(worst <= 1e-2);
+  }
+}

@@ -18,8 +18,8 @@ template <Scalar S> struct FaceQuery {
   int evaluations;      ///< SDF evaluations spent, the centroid's included
 };
 
-/// Euclidean projection onto {b : b_i >= 0, sum b_i = 1} (sort-based, exact for three coordinates). The face
-/// search no longer needs it; it stays as a tested utility.
+/// Euclidean projection onto {b : b_i >= 0, sum b_i = 1} (sort-based, exact for three coordinates), for the
+/// descent on non-convex fields.
 template <Scalar S> Vec3<S> projectToSimplex(const Vec3<S>& y) {
   S u[3] = {y[0], y[1], y[2]};
   std::sort(u, u + 3, [](S a, S b) { return a > b; });
@@ -143,6 +143,50 @@ FaceQuery<S> deepestPointOnFace(const Field& sdf, const Vec3<S>& x0, const Vec3<
   return q;
 }
 
+/// The same search for a field that may not be convex (a grid SDF built from a non-convex mesh), where tangent
+/// planes bound nothing: the projected gradient descent of paper 002 over the barycentric simplex, started from
+/// the centroid. The gradient in barycentric coordinates is g = (n . x0, n . x1, n . x2), taken within the
+/// simplex's plane. The first trial moves one face extent down it, as the cutting-plane search's first step
+/// goes to a corner; after an accepted step the next length is the Barzilai-Borwein one, s.s / s.y (s the
+/// step, y the change of gradient), which is Newton's step on a quadratic; a step that does not lower phi is
+/// halved. It stops when a step moves less than kMinStep in barycentric units (a thousandth of the face), or
+/// after maxIterations evaluations, the centroid's included. It finds a local minimum: where a face crosses a
+/// concave crease, the deeper side can be missed if the centroid's gradient points away from it; the vertex
+/// pass still catches the face's corners.
+template <Scalar S, class Field>
+FaceQuery<S> descendOnFace(const Field& sdf, const Vec3<S>& x0, const Vec3<S>& x1, const Vec3<S>& x2,
+                           const Vec3<S>& centroid, S phiC, const Vec3<S>& gradC, int maxIterations) {
+  FaceQuery<S> q{Vec3<S>::Constant(S(1) / S(3)), centroid, gradC, phiC, 1};
+  constexpr S kMinStep = S(1e-3);
+  const Vec3<S> e1 = x1 - x0, e2 = x2 - x0;
+  auto slopeAt = [&](const Vec3<S>& n) {
+    const Vec3<S> g(n.dot(x0), n.dot(x1), n.dot(x2));
+    return Vec3<S>(g - Vec3<S>::Constant(g.mean()));
+  };
+  Vec3<S> slope = slopeAt(gradC);
+  S alpha = slope.norm() > S(0) ? S(1) / slope.norm() : S(0);  // the first trial moves one unit
+  while (q.evaluations < maxIterations && alpha > S(0)) {
+    const Vec3<S> b = projectToSimplex<S>(q.barycentric - alpha * slope);
+    const Vec3<S> step = b - q.barycentric;
+    if (step.cwiseAbs().maxCoeff() < kMinStep) break;  // converged, or pinned against an edge or corner
+    const Vec3<S> p = x0 + b[1] * e1 + b[2] * e2;
+    Vec3<S> n;
+    const S phi = sdf(p, n);
+    ++q.evaluations;
+    if (phi < q.phi) {
+      const Vec3<S> next = slopeAt(n);
+      const S sy = step.dot(next - slope);
+      // Barzilai-Borwein where the curvature along the step is positive; otherwise twice the last length.
+      alpha = sy > S(0) ? step.squaredNorm() / sy : S(2) * alpha;
+      slope = next;
+      q = {b, p, n, phi, q.evaluations};
+    } else {
+      alpha *= S(0.5);
+    }
+  }
+  return q;
+}
+
 /// One face against one field: the bounding-sphere cull (when kCull) and, if the face may come within margin,
 /// its deepest point. Returns false when culled. Shared by the solver's face pass and the penetration metric.
 template <bool kCull, Scalar S, class Field>
@@ -154,7 +198,10 @@ bool queryFace(const Field& sdf, const Vec3<S>& x0, const Vec3<S>& x1, const Vec
   if constexpr (kCull) {
     if (phiC > sphere.radius + margin) return false;
   }
-  q = deepestPointOnFace<S>(sdf, x0, x1, x2, sphere.centre, phiC, gradC, maxIterations);
+  if constexpr (Field::kConvex)
+    q = deepestPointOnFace<S>(sdf, x0, x1, x2, sphere.centre, phiC, gradC, maxIterations);
+  else
+    q = descendOnFace<S>(sdf, x0, x1, x2, sphere.centre, phiC, gradC, maxIterations);
   return true;
 }
 

@@ -31,6 +31,7 @@ template <class Shape, Scalar S> struct Sdf;
 
 template <Scalar S> struct Sdf<Plane, S> {
   static constexpr bool kLinear = true;  ///< phi is linear: its minimum over a face is at a vertex
+  static constexpr bool kConvex = true;  ///< phi is convex: the face search may use its tangent planes as bounds
   Vec3<S> normal;
   S offset;  ///< phi(x) = normal . x - offset
 
@@ -42,6 +43,7 @@ template <Scalar S> struct Sdf<Plane, S> {
 
 template <Scalar S> struct Sdf<Sphere, S> {
   static constexpr bool kLinear = false;
+  static constexpr bool kConvex = true;
   Vec3<S> centre;
   S radius;
 
@@ -55,6 +57,7 @@ template <Scalar S> struct Sdf<Sphere, S> {
 
 template <Scalar S> struct Sdf<Box, S> {
   static constexpr bool kLinear = false;
+  static constexpr bool kConvex = true;
   Mat3<S> toLocal;  ///< rotation world -> box frame
   Vec3<S> centre;
   Vec3<S> halfExtents;
@@ -82,6 +85,7 @@ template <Scalar S> struct Sdf<Box, S> {
 
 template <Scalar S> struct Sdf<Capsule, S> {
   static constexpr bool kLinear = false;
+  static constexpr bool kConvex = true;
   Vec3<S> centre;
   Vec3<S> axis;  ///< unit, world
   S halfHeight;
