@@ -8,6 +8,8 @@
 #include <drape/constraints/distance.hpp>
 #include <drape/math.hpp>
 #include <drape/metrics.hpp>
+#include <drape/sdf/grid.hpp>
+#include <drape/sdf/mesh.hpp>
 #include <drape/sdf/shapes.hpp>
 #include <drape/sdf/solid.hpp>
 #include <drape/settings.hpp>

@@ -9,6 +9,7 @@
 #include <drape/collision/response.hpp>
 #include <drape/constraints/distance.hpp>
 #include <drape/detail/parallel.hpp>
+#include <drape/sdf/grid.hpp>
 #include <drape/sdf/solid.hpp>
 #include <drape/settings.hpp>
 
@@ -403,7 +404,7 @@ template <Scalar S, class... Shapes> class BasicSolver {
   bool reconcile_ = false;    ///< a vertex may touch several surfaces this substep
 };
 
-/// The solver with every built-in shape.
-template <Scalar S> using Solver = BasicSolver<S, Plane, Sphere, Box, Capsule>;
+/// The solver with every built-in shape, grid distance fields from meshes included.
+template <Scalar S> using Solver = BasicSolver<S, Plane, Sphere, Box, Capsule, MeshShape>;
 
 }  // namespace drape

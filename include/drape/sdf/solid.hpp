@@ -1,6 +1,7 @@
 #pragma once
 // A solid: a shape, a pose, how it moves, and its friction with the cloth.
 
+#include <drape/sdf/grid.hpp>  // every shape's compileSdf must be declared before compileSolid
 #include <drape/sdf/shapes.hpp>
 
 namespace drape {
