@@ -206,6 +206,7 @@ template <Scalar S, class... Shapes> class BasicSolver {
 
   void prepareSolids(double h) {
     hasFriction_ = false;
+    repulsive_ = false;
     reconcile_ = solidCount() > 1;
     std::apply(
         [&](auto&... lists) {
@@ -215,6 +216,7 @@ template <Scalar S, class... Shapes> class BasicSolver {
                 auto& out = std::get<std::vector<CompiledSolid<Shape, S>>>(compiled_);
                 for (std::size_t k = 0; k < list.size(); ++k) {
                   hasFriction_ = hasFriction_ || list[k].staticFriction > 0 || list[k].dynamicFriction > 0;
+                  repulsive_ = repulsive_ || list[k].repulsion.radius > 0;
                   reconcile_ = reconcile_ || !Sdf<Shape, S>::kLinear;
                   detail::advancePose(list[k], h);
                   out[k] = detail::compileSolid<Shape, S>(list[k], state_.origin);
@@ -243,6 +245,9 @@ template <Scalar S, class... Shapes> class BasicSolver {
     Vec3<S>* x0 = xPrev_.data();
     const S* w = state_.invMass.data();
     const ClothAsset<S>& a = *asset_;
+
+    // 0. repulsion (phase 1), only in a scene that declares it
+    if (repulsive_) repel(S(settings_.thickness));
 
     // 1. predict (the start positions are kept only for friction, their one reader)
     const Vec3<S> gh = (settings_.gravity * double(h)).template cast<S>();
@@ -301,6 +306,19 @@ template <Scalar S, class... Shapes> class BasicSolver {
 
     // 4. collide
     if (!baseline) collide(h, thickness);
+  }
+
+  void repel(S thickness) {
+    Vec3<S>* v = state_.v.data();
+    forEachCompiled([&](auto& list) {
+      for (const auto& solid : list) {
+        if (!(solid.repulsionRadius > S(0))) continue;
+        if (solid.falloff == Falloff::Linear)
+          repelVertices<Falloff::Linear>(solid, thickness, state_.x.data(), v, state_.invMass.data(), vertexCount());
+        else
+          repelVertices<Falloff::Smooth>(solid, thickness, state_.x.data(), v, state_.invMass.data(), vertexCount());
+      }
+    });
   }
 
   void solveSet(const DistanceSet<S>& set, S alpha, S* lambda, int iterations) {
@@ -401,6 +419,7 @@ template <Scalar S, class... Shapes> class BasicSolver {
   PropagationBuffer<S> propagation_;
   CollisionStats stats_;
   bool hasFriction_ = false;  ///< some solid has friction this substep
+  bool repulsive_ = false;    ///< some solid has a repulsion region this substep
   bool reconcile_ = false;    ///< a vertex may touch several surfaces this substep
 };
 

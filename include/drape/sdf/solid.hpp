@@ -11,6 +11,23 @@ enum class Motion {
   Kinematic,  ///< moved by its given velocities every substep, unaffected by the cloth
 };
 
+/// How the blend weight of the repulsion region falls off with distance (paper 001, eq. 5.5 and the polynomial
+/// it mentions): a(t) with t = d / R, 0 at contact and 1 at the region's edge.
+enum class Falloff {
+  Linear,  ///< a = t
+  Smooth,  ///< a = 3t^2 - 2t^3: no kink at either end, so the blend starts and ends gently
+};
+
+/// Phase 1 of paper 001 (DESIGN 5): a cloth vertex within `radius` of the solid's contact shell (0 <= phi -
+/// thickness < radius) has its velocity blended toward the solid's velocity at that point before each
+/// substep's prediction, v' = a v + (1 - a) v_c. Off (radius 0) by default; a scene with no repulsive solid
+/// runs no repulsion loop. The whole velocity is blended, as in the paper: near a solid it also slows
+/// sliding, like a cushion of air.
+struct Repulsion {
+  double radius = 0;  ///< m beyond the thickness; 0 turns it off
+  Falloff falloff = Falloff::Linear;
+};
+
 template <class Shape> struct Solid {
   Shape shape{};
   Pose pose{};
@@ -19,6 +36,7 @@ template <class Shape> struct Solid {
   Motion motion = Motion::Static;
   double staticFriction = 0;   ///< Coulomb coefficient for sticking
   double dynamicFriction = 0;  ///< Coulomb coefficient while sliding (applied to position and velocity alike)
+  Repulsion repulsion{};
 };
 
 /// The part of a compiled solid that contact response needs: its velocity field and friction.
@@ -37,6 +55,8 @@ template <Scalar S> struct SolidMotion {
 template <class Shape, Scalar S> struct CompiledSolid {
   Sdf<Shape, S> sdf;
   SolidMotion<S> motion;
+  S repulsionRadius = 0;  ///< m beyond the thickness; 0: none
+  Falloff falloff = Falloff::Linear;
 };
 
 namespace detail {
@@ -52,6 +72,10 @@ template <class Shape> void validateSolid(const Solid<Shape>& s, const std::stri
           name + ": staticFriction must be >= 0 (got " + std::to_string(s.staticFriction) + ")");
   require(std::isfinite(s.dynamicFriction) && s.dynamicFriction >= 0,
           name + ": dynamicFriction must be >= 0 (got " + std::to_string(s.dynamicFriction) + ")");
+  require(std::isfinite(s.repulsion.radius) && s.repulsion.radius >= 0 && s.repulsion.radius <= 10,
+          name + ": repulsion radius must be in [0, 10] m (got " + std::to_string(s.repulsion.radius) + ")");
+  require(s.repulsion.falloff == Falloff::Linear || s.repulsion.falloff == Falloff::Smooth,
+          name + ": repulsion falloff is not a Falloff value");
   validateShape(s.shape);
 }
 
@@ -59,7 +83,9 @@ template <class Shape, Scalar S>
 CompiledSolid<Shape, S> compileSolid(const Solid<Shape>& s, const Eigen::Vector3d& origin) {
   return {compileSdf<S>(s.shape, s.pose, origin),
           {(s.pose.position - origin).template cast<S>(), s.linearVelocity.template cast<S>(), s.angularVelocity.template cast<S>(),
-           S(s.staticFriction), S(s.dynamicFriction)}};
+           S(s.staticFriction), S(s.dynamicFriction)},
+          S(s.repulsion.radius),
+          s.repulsion.falloff};
 }
 
 /// Advances a kinematic solid's pose by its velocities over h seconds (exact for constant velocities).
