@@ -28,6 +28,33 @@ inline const char* toString(CollisionMethod m) {
   return "?";
 }
 
+/// How the cloth's push on a dynamic solid is estimated (paper 000, 5.2; DESIGN 6). Each is explicit: per contact,
+/// the force on the particle is reversed onto the body at the contact point, summed into one force and torque
+/// per body and applied in the same substep. The velocity the repulsion region (phase 1) takes from a particle
+/// near a dynamic solid is passed on as an impulse whatever the estimator (the thesis's combination: the
+/// energy estimate has no displacement to work with before contact).
+enum class ContactForce {
+  /// (F . n) n of the net force on the particle other than the contact (constraints, gravity) where it presses
+  /// into the body: right for a resting load, blind to the particle's own momentum.
+  SubForce,
+  /// The work that changed the particle's kinetic energy over its displacement: (dE - F_other . d) / |d|^2 d.
+  /// Underestimates where the particle and the body move oppositely; no force without a displacement.
+  Energy,
+  /// The momentum the contact gave the particle, m dv / h: the larger of the velocity change and the position
+  /// correction over h along the normal (they agree where the particle can move; where it cannot, pinched
+  /// against another surface, the correction carries the load), plus the tangential (friction) change.
+  Impulse,
+};
+
+inline const char* toString(ContactForce f) {
+  switch (f) {
+    case ContactForce::SubForce: return "sub-force";
+    case ContactForce::Energy: return "energy";
+    case ContactForce::Impulse: return "impulse";
+  }
+  return "?";
+}
+
 struct Settings {
   int subStepCount = 10;   ///< substeps per step(dt); h = dt / subStepCount
   int iterationCount = 1;  ///< constraint-solve passes per substep
@@ -48,6 +75,10 @@ struct Settings {
   bool culling = true;         ///< bounding-sphere culling of faces (exact: it never drops a contact)
   double propagationWeight = 0.5;  ///< share of a contact's normal velocity correction given to neighbours
   int propagationRings = 1;        ///< how many rings of neighbours receive it (0: none)
+
+  ContactForce contactForce = ContactForce::Impulse;  ///< how the push on dynamic solids is estimated
+  bool normalForceOnly = false;  ///< pass only the normal part of each contact force (the thesis's cure for
+                                 ///< noisy torque from the energy and impulse estimates)
 
   /// Threads a step uses (OpenMP): 1 runs on the calling thread, 0 uses OpenMP's default team size. The
   /// result is bit-identical for every count. Without OpenMP at compile time every count runs on one thread.
@@ -77,6 +108,9 @@ struct Settings {
     requireRange(propagationWeight, 0, 1, "propagationWeight");
     require(propagationRings >= 0 && propagationRings <= 8,
             "propagationRings must be in [0, 8] (got " + std::to_string(propagationRings) + ")");
+    require(contactForce == ContactForce::SubForce || contactForce == ContactForce::Energy ||
+                contactForce == ContactForce::Impulse,
+            "contactForce is not one of sub-force, energy, impulse");
     require(threadCount >= 0 && threadCount <= 1024,
             "threadCount must be in [0, 1024] (got " + std::to_string(threadCount) + ")");
   }

@@ -13,6 +13,8 @@
 #include <drape/sdf/solid.hpp>
 #include <drape/settings.hpp>
 
+#include <algorithm>
+#include <cstdint>
 #include <limits>
 #include <memory>
 #include <tuple>
@@ -31,6 +33,8 @@ struct Pin {
 template <Scalar S, class... Shapes> class BasicSolver {
  public:
   using scalar_type = S;
+  /// Whether this solver takes solids of that shape type.
+  template <class Shape> static constexpr bool kHasShape = (std::is_same_v<Shape, Shapes> || ...);
 
   /// asset: shared topology; areaDensity: kg/m^2, giving each vertex a third of its faces' mass.
   explicit BasicSolver(std::shared_ptr<const ClothAsset<S>> asset, const Settings& settings = {},
@@ -173,6 +177,11 @@ template <Scalar S, class... Shapes> class BasicSolver {
     }
   }
 
+  /// The force and torque (about the body's centre of mass) the cloth applied to each coupled body in the last
+  /// substep, in the order the dynamic solids were visited (shape type by shape type, then by index).
+  const std::vector<Eigen::Vector3d>& bodyForces() const { return bodyForce_; }
+  const std::vector<Eigen::Vector3d>& bodyTorques() const { return bodyTorque_; }
+
   /// Collision work of the last substep.
   const CollisionStats& stats() const { return stats_; }
   /// Contact records of the last substep (improved and vertex methods).
@@ -207,6 +216,8 @@ template <Scalar S, class... Shapes> class BasicSolver {
   void prepareSolids(double h) {
     hasFriction_ = false;
     repulsive_ = false;
+    bodies_.clear();
+    bodyCentre_.clear();
     reconcile_ = solidCount() > 1;
     std::apply(
         [&](auto&... lists) {
@@ -220,6 +231,11 @@ template <Scalar S, class... Shapes> class BasicSolver {
                   reconcile_ = reconcile_ || !Sdf<Shape, S>::kLinear;
                   detail::advancePose(list[k], h);
                   out[k] = detail::compileSolid<Shape, S>(list[k], state_.origin);
+                  if (list[k].motion == Motion::Dynamic) {
+                    out[k].motion.body = std::int32_t(bodies_.size());
+                    bodies_.push_back(list[k].body);
+                    bodyCentre_.push_back(list[k].body->pose().position);
+                  }
                 }
               }(lists),
               ...);
@@ -227,6 +243,13 @@ template <Scalar S, class... Shapes> class BasicSolver {
         solids_);
     for (std::size_t k = 0; k < pins_.size(); ++k)
       pinLocal_[k].target = (pins_[k].target - state_.origin).template cast<S>();
+    coupled_ = !bodies_.empty();
+    bodyForce_.assign(bodies_.size(), Eigen::Vector3d::Zero());
+    bodyTorque_.assign(bodies_.size(), Eigen::Vector3d::Zero());
+    if (coupled_ && vStart_.size() != state_.v.size()) {
+      vStart_.resize(state_.v.size());
+      vPre_.resize(state_.v.size());
+    }
   }
 
   void subStep(double hd) {
@@ -247,7 +270,8 @@ template <Scalar S, class... Shapes> class BasicSolver {
     const ClothAsset<S>& a = *asset_;
 
     // 0. repulsion (phase 1), only in a scene that declares it
-    if (repulsive_) repel(S(settings_.thickness));
+    if (repulsive_) repel(S(settings_.thickness), h);
+    if (coupled_) copyVelocities(vStart_);  // the estimators' velocity at the start of the substep
 
     // 1. predict (the start positions are kept only for friction, their one reader)
     const Vec3<S> gh = (settings_.gravity * double(h)).template cast<S>();
@@ -263,7 +287,7 @@ template <Scalar S, class... Shapes> class BasicSolver {
         xp[i] = x[i];
       }
     };
-    if (hasFriction_)
+    if (hasFriction_ || coupled_)  // the energy estimate reads the start positions too
       predict(std::true_type{});
     else
       predict(std::false_type{});
@@ -305,20 +329,148 @@ template <Scalar S, class... Shapes> class BasicSolver {
     for (Index i = 0; i < n; ++i) v[i] += (x[i] - xp[i]) * invH;
 
     // 4. collide
+    if (coupled_) copyVelocities(vPre_);  // before any contact acts
     if (!baseline) collide(h, thickness);
+
+    // 5. the cloth's push on the coupled bodies, applied before they move (DESIGN 6)
+    if (coupled_) {
+      DRAPE_OMP(single)
+      {
+        gatherContactForces(h, thickness);
+        for (std::size_t b = 0; b < bodies_.size(); ++b) bodies_[b]->applyForceAndTorque(bodyForce_[b], bodyTorque_[b]);
+      }
+    }
   }
 
-  void repel(S thickness) {
+  void copyVelocities(std::vector<Vec3<S>>& to) {
+    const Vec3<S>* v = state_.v.data();
+    Vec3<S>* out = to.data();
+    DRAPE_OMP(for schedule(static))
+    for (Index i = 0; i < vertexCount(); ++i) out[i] = v[i];
+  }
+
+  void repel(S thickness, S h) {
     Vec3<S>* v = state_.v.data();
     forEachCompiled([&](auto& list) {
       for (const auto& solid : list) {
         if (!(solid.repulsionRadius > S(0))) continue;
+        if (solid.motion.body >= 0) copyVelocities(vPre_);  // scratch: what the region changes is an impulse
         if (solid.falloff == Falloff::Linear)
           repelVertices<Falloff::Linear>(solid, thickness, state_.x.data(), v, state_.invMass.data(), vertexCount());
         else
           repelVertices<Falloff::Smooth>(solid, thickness, state_.x.data(), v, state_.invMass.data(), vertexCount());
+        if (solid.motion.body >= 0) {
+          DRAPE_OMP(single)
+          gatherRepulsionForces(solid, h);
+        }
       }
     });
+  }
+
+  /// The velocity the region took from each particle near a dynamic solid, m dv / h, reversed onto the body at
+  /// the particle's closest point on it.
+  template <class Solid> void gatherRepulsionForces(const Solid& solid, S h) {
+    const std::int32_t b = solid.motion.body;
+    const Eigen::Vector3d& centre = bodyCentre_[b];
+    for (Index i = 0; i < vertexCount(); ++i) {
+      const Vec3<S> dv = state_.v[i] - vPre_[i];
+      if (dv.isZero(0)) continue;
+      Vec3<S> n;
+      const S phi = solid.sdf(state_.x[i], n);
+      Eigen::Vector3d force = -(dv / (state_.invMass[i] * h)).template cast<double>();
+      if (settings_.normalForceOnly) force = force.dot(n.template cast<double>()) * n.template cast<double>();
+      const Eigen::Vector3d point = state_.origin + (state_.x[i] - phi * n).template cast<double>();
+      bodyForce_[b] += force;
+      bodyTorque_[b] += (point - centre).cross(force);
+    }
+  }
+
+  /// Phase 2 (DESIGN 6): for every contact vertex, the force its contacts with each coupled body put on it,
+  /// reversed onto that body at the contact point (the vertex moved back by the thickness along the normal).
+  /// A vertex's velocity change is one vector however many slots made it, so when all its slots belong to one
+  /// body that body gets the whole of it, along the normal of the slot that corrected the vertex most; a vertex
+  /// between two bodies (or a body and a fixed solid) passes each body the normal part along its own slot.
+  /// Serial, in vertex order, so the sums do not depend on the thread count.
+  void gatherContactForces(S h, S thickness) {
+    const ContactForce estimator = settings_.contactForce;
+    const bool propagated = estimator == ContactForce::Impulse && settings_.propagationRings > 0 &&
+                            settings_.propagationWeight > 0 && settings_.collisionMethod == CollisionMethod::Improved;
+    for (Index i = 0; i < vertexCount(); ++i) {
+      if (!contacts_.live(i)) {
+        if (propagated) gatherPropagatedImpulse(i, h, thickness);
+        continue;
+      }
+      const int count = contacts_.slotCount[i];
+      const auto& slots = contacts_.slots[i];
+      bool oneBody = true;
+      int top = 0;  // the slot that corrected the vertex most
+      for (int k = 1; k < count; ++k) {
+        oneBody = oneBody && slots[k].body == slots[0].body;
+        if (slots[k].correction > slots[top].correction) top = k;
+      }
+      const S m = S(1) / state_.invMass[i];
+      const Vec3<S>& v = state_.v[i];
+      const Vec3<S> dv = v - vPre_[i];                                // what the contacts did
+      const Vec3<S> otherForce = m * (vPre_[i] - vStart_[i]) / h;  // constraints and gravity this substep
+      Vec3<S> energyForce = Vec3<S>::Zero();                          // on the particle
+      if (estimator == ContactForce::Energy) {
+        const Vec3<S> d = state_.x[i] - xPrev_[i];
+        const S d2 = d.squaredNorm();
+        const S work = S(0.5) * m * (v.squaredNorm() - vStart_[i].squaredNorm()) - otherForce.dot(d);
+        if (d2 > S(1e-24)) energyForce = (work / d2) * d;
+      }
+      for (int k = 0; k < count; ++k) {
+        const ContactSlot<S>& c = slots[k];
+        if (c.body < 0 || (oneBody && k != top)) continue;
+        const Vec3<S>& n = c.normal;
+        Vec3<S> onBody = Vec3<S>::Zero();
+        switch (estimator) {
+          case ContactForce::SubForce: {
+            const S fn = otherForce.dot(n);
+            if (fn < S(0)) onBody = fn * n;
+            break;
+          }
+          case ContactForce::Energy:
+            onBody = oneBody ? Vec3<S>(-energyForce) : Vec3<S>(-energyForce.dot(n) * n);
+            break;
+          case ContactForce::Impulse: {
+            const S dvn = dv.dot(n);
+            Vec3<S> impulse = std::max(dvn, c.correction / h) * n;
+            if (oneBody) impulse += dv - dvn * n;  // the tangential (friction) change
+            onBody = -(m / h) * impulse;
+            break;
+          }
+        }
+        Eigen::Vector3d force = onBody.template cast<double>();
+        if (settings_.normalForceOnly) force = force.dot(n.template cast<double>()) * n.template cast<double>();
+        const Eigen::Vector3d point = state_.origin + (state_.x[i] - thickness * n).template cast<double>();
+        bodyForce_[c.body] += force;
+        bodyTorque_[c.body] += (point - bodyCentre_[c.body]).cross(force);
+      }
+    }
+  }
+
+  /// Propagation gave vertex i (not in contact) a velocity change on behalf of its contact neighbours: the
+  /// impulse estimate passes it to the body of the first neighbour in contact with one. (A change that came
+  /// from further rings, or from a fixed solid's contacts, is not passed on.)
+  void gatherPropagatedImpulse(Index i, S h, S thickness) {
+    const Vec3<S> dv = state_.v[i] - vPre_[i];
+    if (dv.isZero(0) || state_.invMass[i] == S(0)) return;
+    const Adjacency& around = asset_->vertexNeighbours;
+    for (const Index* j = around.begin(i); j != around.end(i); ++j) {
+      if (!contacts_.live(*j)) continue;
+      const auto& slots = contacts_.slots[*j];
+      for (int k = 0; k < contacts_.slotCount[*j]; ++k) {
+        if (slots[k].body < 0) continue;
+        const Vec3<S>& n = slots[k].normal;
+        Eigen::Vector3d force = (-(dv / (state_.invMass[i] * h))).template cast<double>();
+        if (settings_.normalForceOnly) force = force.dot(n.template cast<double>()) * n.template cast<double>();
+        const Eigen::Vector3d point = state_.origin + (state_.x[*j] - thickness * n).template cast<double>();
+        bodyForce_[slots[k].body] += force;
+        bodyTorque_[slots[k].body] += (point - bodyCentre_[slots[k].body]).cross(force);
+        return;
+      }
+    }
   }
 
   void solveSet(const DistanceSet<S>& set, S alpha, S* lambda, int iterations) {
@@ -421,6 +573,11 @@ template <Scalar S, class... Shapes> class BasicSolver {
   bool hasFriction_ = false;  ///< some solid has friction this substep
   bool repulsive_ = false;    ///< some solid has a repulsion region this substep
   bool reconcile_ = false;    ///< a vertex may touch several surfaces this substep
+  bool coupled_ = false;      ///< some solid is a dynamic body this substep
+  std::vector<CoupledBody*> bodies_;                    ///< the dynamic solids' bodies, this substep
+  std::vector<Eigen::Vector3d> bodyCentre_;             ///< their centres of mass at the substep's start
+  std::vector<Eigen::Vector3d> bodyForce_, bodyTorque_;  ///< what the cloth passed to each, this substep
+  std::vector<Vec3<S>> vStart_, vPre_;                  ///< velocities at the substep's start, before contacts
 };
 
 /// The solver with every built-in shape, grid distance fields from meshes included.

@@ -23,6 +23,7 @@ template <Scalar S> struct ContactSlot {
   S correction;           ///< normal position correction along this normal this substep (m)
   S staticFriction, dynamicFriction;
   S offset;               ///< the surface as a half-space: normal . x >= offset where the vertex was placed
+  std::int32_t body;      ///< the coupled body the surface belongs to, -1 for none (SolidMotion::body)
 };
 
 /// Per-vertex contact records of one substep. A vertex may touch up to kSlots differently-facing surfaces
@@ -91,7 +92,7 @@ template <Scalar S> struct ContactBuffer {
       if (c >= bestCos) best = k, bestCos = c;
     }
     if (best < 0 && slotCount[i] < kSlots) {
-      own[slotCount[i]++] = {n, vc, dn, m.staticFriction, m.dynamicFriction, n.dot(x)};
+      own[slotCount[i]++] = {n, vc, dn, m.staticFriction, m.dynamicFriction, n.dot(x), m.body};
       return;
     }
     if (best < 0) {  // all slots taken by other directions: join the closest
@@ -102,6 +103,7 @@ template <Scalar S> struct ContactBuffer {
     if (bestCos >= kMergeCos) {  // the same surface, seen again: its latest normal and placement
       own[best].normal = n;
       own[best].offset = n.dot(x);
+      own[best].body = m.body;
     } else {
       own[best].offset = std::max(own[best].offset, own[best].normal.dot(x));
     }

@@ -90,6 +90,12 @@ class RigidBody : public CoupledBody {
     const Eigen::Matrix3d R = state.pose.rotation.toRotationMatrix();
     return R * invInertiaBody_ * R.transpose();
   }
+  void applyForceAndTorque(const Eigen::Vector3d& force, const Eigen::Vector3d& torque) override {
+    detail::require(detail::allFinite(force) && detail::allFinite(torque),
+                    "applyForceAndTorque: force and torque must be finite");
+    force_ += force;
+    torque_ += torque;
+  }
   void applyForceAtPoint(const Eigen::Vector3d& force, const Eigen::Vector3d& point) override {
     detail::require(detail::allFinite(force), "applyForceAtPoint: force must be finite");
     detail::require(detail::allFinite(point), "applyForceAtPoint: point must be finite");

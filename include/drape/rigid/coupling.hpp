@@ -31,6 +31,21 @@ class CoupledBody {
   /// itself and the torque (point - centre of mass) x force. Throws drape::Error if either is not finite.
   virtual void applyForceAtPoint(const Eigen::Vector3d& force, const Eigen::Vector3d& point) = 0;
 
+  /// Adds a force acting at the centre of mass and a torque (N m, world). The cloth solver sums its contacts into
+  /// one such pair per body per substep. The default passes them on as three forces at points; an engine with
+  /// a torque accumulator should override it.
+  virtual void applyForceAndTorque(const Eigen::Vector3d& force, const Eigen::Vector3d& torque) {
+    const Eigen::Vector3d c = pose().position;
+    applyForceAtPoint(force, c);
+    const double t = torque.norm();
+    if (!(t > 0)) return;
+    // A couple: f at c + u and -f at c, with u a unit vector normal to the torque and f = torque x u.
+    const Eigen::Vector3d u = torque.unitOrthogonal();
+    const Eigen::Vector3d f = torque.cross(u);
+    applyForceAtPoint(f, c + u);
+    applyForceAtPoint(-f, c);
+  }
+
   /// Velocity of the body's material point at `point` (m/s): v + w x (point - centre of mass).
   Eigen::Vector3d velocityAt(const Eigen::Vector3d& point) const {
     return linearVelocity() + angularVelocity().cross(point - pose().position);

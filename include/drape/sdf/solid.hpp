@@ -1,14 +1,20 @@
 #pragma once
 // A solid: a shape, a pose, how it moves, and its friction with the cloth.
 
+#include <drape/rigid/coupling.hpp>
 #include <drape/sdf/grid.hpp>  // every shape's compileSdf must be declared before compileSolid
 #include <drape/sdf/shapes.hpp>
+
+#include <cstdint>
 
 namespace drape {
 
 enum class Motion {
   Static,     ///< never moves; its velocity must be zero
   Kinematic,  ///< moved by its given velocities every substep, unaffected by the cloth
+  /// A rigid body the cloth pushes back (DESIGN 6, 7): its pose and velocities are read from `body` every
+  /// substep (the solid's own are ignored), and the contact forces are applied to it.
+  Dynamic,
 };
 
 /// How the blend weight of the repulsion region falls off with distance (paper 001, eq. 5.5 and the polynomial
@@ -37,6 +43,9 @@ template <class Shape> struct Solid {
   double staticFriction = 0;   ///< Coulomb coefficient for sticking
   double dynamicFriction = 0;  ///< Coulomb coefficient while sliding (applied to position and velocity alike)
   Repulsion repulsion{};
+  /// The body a Motion::Dynamic solid follows and pushes (not owned; it must outlive its use by the solver).
+  /// The shape is in the body's frame, whose origin is its centre of mass.
+  CoupledBody* body = nullptr;
 };
 
 /// The part of a compiled solid that contact response needs: its velocity field and friction.
@@ -46,6 +55,7 @@ template <Scalar S> struct SolidMotion {
   Vec3<S> angularVelocity;
   S staticFriction;
   S dynamicFriction;
+  std::int32_t body = -1;  ///< index of the solver's coupled body this solid pushes; -1 for none
 
   /// v_c(x) = v_r + w x (x - x_r): the velocity of the solid's material point at x (thesis eq. 5.4).
   Vec3<S> velocityAt(const Vec3<S>& x) const { return linearVelocity + angularVelocity.cross(x - centre); }
@@ -68,6 +78,11 @@ template <class Shape> void validateSolid(const Solid<Shape>& s, const std::stri
   require(detail::allFinite(s.linearVelocity) && detail::allFinite(s.angularVelocity), name + ": velocities must be finite");
   require(s.motion != Motion::Static || (s.linearVelocity.isZero(0) && s.angularVelocity.isZero(0)),
           name + ": a static solid must have zero velocity (make it Motion::Kinematic to move it)");
+  require(s.motion == Motion::Static || s.motion == Motion::Kinematic || s.motion == Motion::Dynamic,
+          name + ": motion is not a Motion value");
+  require((s.motion == Motion::Dynamic) == (s.body != nullptr),
+          name + (s.body ? ": a body is given but the motion is not Motion::Dynamic"
+                         : ": a Motion::Dynamic solid needs the body it follows"));
   require(std::isfinite(s.staticFriction) && s.staticFriction >= 0,
           name + ": staticFriction must be >= 0 (got " + std::to_string(s.staticFriction) + ")");
   require(std::isfinite(s.dynamicFriction) && s.dynamicFriction >= 0,
@@ -88,9 +103,20 @@ CompiledSolid<Shape, S> compileSolid(const Solid<Shape>& s, const Eigen::Vector3
           s.repulsion.falloff};
 }
 
-/// Advances a kinematic solid's pose by its velocities over h seconds (exact for constant velocities).
+/// Advances a kinematic solid's pose by its velocities over h seconds (exact for constant velocities). A
+/// dynamic solid first takes its body's pose and velocities, then is carried the same way to where the body
+/// will be at the end of the substep if no force acts, which is where the cloth's prediction meets it.
 template <class Shape> void advancePose(Solid<Shape>& s, double h) {
-  if (s.motion != Motion::Kinematic) return;
+  if (s.motion == Motion::Dynamic) {
+    s.pose = s.body->pose();
+    s.linearVelocity = s.body->linearVelocity();
+    s.angularVelocity = s.body->angularVelocity();
+    require(detail::allFinite(s.pose.position) && detail::allFinite(s.linearVelocity) &&
+                detail::allFinite(s.angularVelocity),
+            "a coupled body's pose or velocity is not finite");
+  } else if (s.motion != Motion::Kinematic) {
+    return;
+  }
   s.pose.position += h * s.linearVelocity;
   const double angle = s.angularVelocity.norm() * h;
   if (angle > 0)
