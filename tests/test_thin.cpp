@@ -67,3 +67,43 @@ TEMPLATE_TEST_CASE("a thin box between vertex rows: faces catch it, vertices let
   CHECK(verticesBelowRod<TestType>(plate, drape::CollisionMethod::Improved) == 0);
   CHECK(verticesBelowRod<TestType>(plate, drape::CollisionMethod::Vertex) > 0);
 }
+
+TEMPLATE_TEST_CASE("a cloth pinched between the floor and a box lower than twice the thickness does not blow up",
+                   "[thin][pinch]", float, double) {
+  using S = TestType;
+  // A 0.4 m cloth on the floor under a 0.16 m box whose bottom is 1.6-1.9 thicknesses up: under the box no
+  // position satisfies both surfaces. Before the pinched vertices were placed by least squares from where
+  // they started, and the velocity put in the cone that approaches no surface, the rim vertices were thrown
+  // sideways along the far-away meeting line of the floor and the box's slightly tilted merged normal, and the
+  // cloth reached 45 m/s at 1.6 thicknesses. Measured now, the fastest vertex over the last half second:
+  // 0.18-0.32 m/s (double), 0.36-1.21 m/s (float). That is not calm: the rim vertices whose faces touch the
+  // box's bottom edges still tremble (with vertex contacts only the cloth is at rest), a known issue.
+  for (const double gapInThicknesses : {1.9, 1.8, 1.6}) {
+    drape::Settings settings;
+    drape::GridDesc grid;
+    grid.nx = grid.ny = 21;
+    grid.spacing = 0.02;
+    grid.placement.position = {0, 0, settings.thickness};
+    drape::Solver<S> cloth(std::make_shared<const drape::ClothAsset<S>>(drape::ClothAsset<S>::grid(grid)), settings);
+    cloth.addSolid(drape::Solid<drape::Plane>{});
+    drape::Solid<drape::Box> box;
+    box.shape.halfExtents = {0.08, 0.08, 0.04};
+    box.pose.position = {0.005, -0.003, gapInThicknesses * settings.thickness + 0.04};
+    cloth.addSolid(box);
+    double fastest = 0, lowest = 1e9, highest = -1e9;
+    for (int s = 0; s < 100; ++s) {
+      cloth.step(0.01);
+      for (drape::Index i = 0; i < cloth.vertexCount(); ++i) {
+        REQUIRE(std::isfinite(cloth.position(i).z()));
+        if (s >= 50) fastest = std::max(fastest, cloth.velocity(i).norm());
+        lowest = std::min(lowest, cloth.position(i).z());
+        highest = std::max(highest, cloth.position(i).z());
+      }
+    }
+    INFO("gap " << gapInThicknesses << " thicknesses: fastest vertex " << fastest << " m/s over the last 0.5 s, z in ["
+                << lowest << ", " << highest << "] m");
+    CHECK(fastest <= 2.0);
+    CHECK(lowest >= 0);                          // never through the floor
+    CHECK(highest <= 3 * settings.thickness);    // nor thrown up
+  }
+}

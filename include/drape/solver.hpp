@@ -324,9 +324,19 @@ template <Scalar S, class... Shapes> class BasicSolver {
     // 3. update velocity: v = (x - x0) / h, computed as v + (x - x_predicted) / h so that the rounding of the
     //    prediction x0 + h v (in float, an ulp of the position, i.e. ulp / h of speed: 4e-4 m/s at 0.5 m and
     //    h = 1/1200 s) does not enter the velocity; free flight keeps v exact.
+    //    Where a vertex may touch several surfaces, the positions the contacts start from are kept (in the
+    //    prediction's buffer, free from here on) for the pinched vertices' least-squares placement.
     const S invH = S(1) / h;
-    DRAPE_OMP(for schedule(static))
-    for (Index i = 0; i < n; ++i) v[i] += (x[i] - xp[i]) * invH;
+    if (reconcile_) {
+      DRAPE_OMP(for schedule(static))
+      for (Index i = 0; i < n; ++i) {
+        v[i] += (x[i] - xp[i]) * invH;
+        xp[i] = x[i];
+      }
+    } else {
+      DRAPE_OMP(for schedule(static))
+      for (Index i = 0; i < n; ++i) v[i] += (x[i] - xp[i]) * invH;
+    }
 
     // 4. collide
     if (coupled_) copyVelocities(vPre_);  // before any contact acts
@@ -435,7 +445,14 @@ template <Scalar S, class... Shapes> class BasicSolver {
             break;
           case ContactForce::Impulse: {
             const S dvn = dv.dot(n);
-            Vec3<S> impulse = std::max(dvn, c.correction / h) * n;
+            // The overlap the projections could not resolve, on the slot's own plane or on an opposing one:
+            // a vertex pinched between this body and another surface ends up behind one of the two planes.
+            S unresolved = std::max(c.offset - n.dot(state_.x[i]), S(0));
+            for (int j = 0; j < count; ++j)
+              if (j != k)
+                unresolved += std::max(slots[j].offset - slots[j].normal.dot(state_.x[i]), S(0)) *
+                              std::max(-slots[j].normal.dot(n), S(0));
+            Vec3<S> impulse = (dvn + unresolved / h) * n;
             if (oneBody) impulse += dv - dvn * n;  // the tangential (friction) change
             onBody = -(m / h) * impulse;
             break;
@@ -512,7 +529,7 @@ template <Scalar S, class... Shapes> class BasicSolver {
     else
       projectContacts<false, false>(thickness);
     if (!reconcile_) return;  // a lone plane gives each vertex one surface: nothing to reconcile
-    projectOntoContactPlanes(contacts_, state_.x.data());
+    projectOntoContactPlanes(contacts_, state_.x.data(), xPredicted_.data());
     if (solidCount() < 2) return;
     for (int pass = 0; pass < kSettlePasses; ++pass) {
       // Every thread reads the count here, between two barriers (the one ending the loop above and the one
@@ -521,7 +538,7 @@ template <Scalar S, class... Shapes> class BasicSolver {
       DRAPE_OMP(barrier)
       projectContacts<false, false>(thickness, S(1e-4) * thickness);
       if (stats_.vertexContacts == before) break;
-      projectOntoContactPlanes(contacts_, state_.x.data());
+      projectOntoContactPlanes(contacts_, state_.x.data(), xPredicted_.data());
     }
   }
 

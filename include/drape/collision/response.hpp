@@ -196,12 +196,67 @@ void projectFaceContacts(const CompiledSolid<Shape, S>& solid, S thickness, int 
   stats.facesTested += Index(triangles.size());
 }
 
+inline constexpr int kLeastSquaresSteps = 16;  ///< Jacobi steps for a point pinched between surfaces
+inline constexpr double kReach = 4;            ///< farthest accepted move to the planes, in total violations
+
+/// The point nearest to y0 in {y : n_k . y >= b_k} for up to three half-spaces: the nearest feasible point
+/// among the projections onto every subset of the planes, which is the exact projection onto their
+/// intersection. The planes are tangents of curved surfaces, so far from y0 they say nothing: two nearly
+/// facing planes (a cloth pinched under a box whose merged normal is tilted a little) meet far away, and going
+/// there would throw the point sideways. A candidate further than `reach` times the total violation counts as
+/// none; where there is none (also when the half-spaces do not meet, as in a gap narrower than twice the
+/// thickness), the answer is the least-squares compromise reached by Jacobi steps on
+/// sum_k max(0, b_k - n_k . y)^2 from `fallback` (between two facing planes, the middle of the gap).
+template <Scalar S>
+Vec3<S> nearestInHalfSpaces(const Vec3<S>* n, const S* b, int count, const Vec3<S>& y0, const Vec3<S>& fallback,
+                            S reach = S(kReach)) {
+  auto feasible = [&](const Vec3<S>& y) {
+    for (int k = 0; k < count; ++k)
+      if (n[k].dot(y) < b[k] - S(1e-6) * std::max(S(1), std::abs(b[k]))) return false;
+    return true;
+  };
+  if (feasible(y0)) return y0;
+  S violation = 0;
+  for (int k = 0; k < count; ++k) violation += std::max(b[k] - n[k].dot(y0), S(0));
+  const S reach2 = reach * reach * violation * violation;
+  Vec3<S> best = y0;
+  S bestDist = std::numeric_limits<S>::infinity();
+  auto consider = [&](const Vec3<S>& y) {
+    const S d = (y - y0).squaredNorm();
+    if (d < bestDist && d <= reach2 && feasible(y)) best = y, bestDist = d;
+  };
+  for (int k = 0; k < count; ++k) consider(y0 + (b[k] - n[k].dot(y0)) * n[k]);
+  for (int j = 0; j < count; ++j)
+    for (int k = j + 1; k < count; ++k) {  // the line where planes j and k meet
+      const S ab = n[j].dot(n[k]), det = S(1) - ab * ab;
+      if (det < S(1e-6)) continue;  // (nearly) parallel: the single-plane candidates cover it
+      const S ra = b[j] - n[j].dot(y0), rb = b[k] - n[k].dot(y0);
+      consider(y0 + ((ra - ab * rb) / det) * n[j] + ((rb - ab * ra) / det) * n[k]);
+    }
+  if (count == 3) {  // the corner where all three meet
+    Mat3<S> m;
+    m << n[0].transpose(), n[1].transpose(), n[2].transpose();
+    if (std::abs(m.determinant()) > S(1e-4)) consider(m.partialPivLu().solve(Vec3<S>(b[0], b[1], b[2])));
+  }
+  if (bestDist < std::numeric_limits<S>::infinity()) return best;
+  best = fallback;
+  for (int it = 0; it < kLeastSquaresSteps; ++it) {
+    Vec3<S> step = Vec3<S>::Zero();
+    for (int k = 0; k < count; ++k) step += std::max(b[k] - n[k].dot(best), S(0)) * n[k];
+    best += step / S(count);
+  }
+  return best;
+}
+
 /// A vertex pushed out of several surfaces one after another (a crease, a box corner, a cloth pinched
 /// between two solids) may end up back inside an earlier one, and alternating projections close in slowly
 /// when the surfaces meet at a sharp angle. This places each such vertex at the nearest point outside all its
-/// contact half-spaces at once: the nearest feasible point among the projections onto every subset of the
-/// (at most three) planes, which is the exact projection onto their intersection.
-template <Scalar S> void projectOntoContactPlanes(const ContactBuffer<S>& contacts, Vec3<S>* x) {
+/// contact half-spaces at once (nearestInHalfSpaces). A pinched vertex starts its least-squares placement
+/// from `reference` (where it was before this substep's contacts moved it): the projections it went through
+/// on the way, some of them sideways off an edge, are forgotten rather than repeated every substep, which
+/// would feed the constraint solve a sideways jump each substep.
+template <Scalar S>
+void projectOntoContactPlanes(const ContactBuffer<S>& contacts, Vec3<S>* x, const Vec3<S>* reference) {
   const Index n = contacts.size();
   DRAPE_OMP(for schedule(static))
   for (Index i = 0; i < n; ++i) {
@@ -209,36 +264,10 @@ template <Scalar S> void projectOntoContactPlanes(const ContactBuffer<S>& contac
     const int count = contacts.slotCount[i];
     if (count < 2) continue;
     const auto& sl = contacts.slots[i];
-    const Vec3<S> x0 = x[i];
-    auto feasible = [&](const Vec3<S>& y) {
-      for (int k = 0; k < count; ++k)
-        if (sl[k].normal.dot(y) < sl[k].offset - S(1e-6) * std::max(S(1), std::abs(sl[k].offset))) return false;
-      return true;
-    };
-    if (feasible(x0)) continue;
-    Vec3<S> best = x0;
-    S bestDist = std::numeric_limits<S>::infinity();
-    auto consider = [&](const Vec3<S>& y) {
-      const S d = (y - x0).squaredNorm();
-      if (d < bestDist && feasible(y)) best = y, bestDist = d;
-    };
-    for (int k = 0; k < count; ++k) consider(x0 + (sl[k].offset - sl[k].normal.dot(x0)) * sl[k].normal);
-    for (int j = 0; j < count; ++j)
-      for (int k = j + 1; k < count; ++k) {  // the line where planes j and k meet
-        const Vec3<S>& a = sl[j].normal;
-        const Vec3<S>& b = sl[k].normal;
-        const S ab = a.dot(b), det = S(1) - ab * ab;
-        if (det < S(1e-6)) continue;  // (nearly) parallel: the single-plane candidates cover it
-        const S ra = sl[j].offset - a.dot(x0), rb = sl[k].offset - b.dot(x0);
-        consider(x0 + ((ra - ab * rb) / det) * a + ((rb - ab * ra) / det) * b);
-      }
-    if (count == 3) {  // the corner where all three meet
-      Mat3<S> m;
-      m << sl[0].normal.transpose(), sl[1].normal.transpose(), sl[2].normal.transpose();
-      if (std::abs(m.determinant()) > S(1e-4))
-        consider(m.partialPivLu().solve(Vec3<S>(sl[0].offset, sl[1].offset, sl[2].offset)));
-    }
-    x[i] = best;
+    Vec3<S> normals[ContactBuffer<S>::kSlots];
+    S offsets[ContactBuffer<S>::kSlots];
+    for (int k = 0; k < count; ++k) normals[k] = sl[k].normal, offsets[k] = sl[k].offset;
+    x[i] = nearestInHalfSpaces(normals, offsets, count, x[i], reference[i]);
   }
 }
 
@@ -293,11 +322,19 @@ void respondContacts(ContactBuffer<S>& contacts, Vec3<S>* x, const Vec3<S>* xPre
       v[i] = c.solidVelocity + vnNew * n + vt;
       dvnSum += std::max(vnNew - vn, S(0));
     }
-    // Answering a later surface can restore velocity into an earlier one: remove that approach again.
-    for (int k = 0; k + 1 < contacts.slotCount[i]; ++k) {
-      const ContactSlot<S>& c = contacts.slots[i][k];
-      const S vn = c.normal.dot(v[i] - c.solidVelocity);
-      if (vn < S(0)) v[i] -= vn * c.normal;
+    // Answering a later surface can restore velocity into an earlier one. The velocity goes to the nearest
+    // one that approaches none of the surfaces (in a wedge, that leaves only motion along its edge); where the
+    // surfaces close in on each other faster than that allows, the least-squares compromise.
+    if (contacts.slotCount[i] > 1) {
+      const int count = contacts.slotCount[i];
+      Vec3<S> normals[ContactBuffer<S>::kSlots];
+      S bounds[ContactBuffer<S>::kSlots];
+      for (int k = 0; k < count; ++k) {
+        const ContactSlot<S>& c = contacts.slots[i][k];
+        normals[k] = c.normal;
+        bounds[k] = c.normal.dot(c.solidVelocity);
+      }
+      v[i] = nearestInHalfSpaces(normals, bounds, count, v[i], v[i], std::numeric_limits<S>::infinity());
     }
     contacts.normalDv[i] = dvnSum;
   }
