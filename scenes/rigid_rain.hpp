@@ -1,0 +1,322 @@
+#pragma once
+// The rigid-body rain of the thesis's Fig 6.6 (issue 4, item 6): a horizontal 50x80 cloth pinned at its four
+// corners half a metre above the floor, and N rigid bodies of random shape (sphere, box, capsule, cylinder,
+// convex hull), size, position, orientation and velocity falling onto it, each coupled two ways with
+// addCoupledBody and stepped with stepCoupled. After `release` seconds the corners are let go and the cloth and
+// the bodies fall to the floor together. Everything random comes from one std::mt19937 seeded from the
+// configuration, so a seed reproduces the run exactly. Shared by samples/rigid_rain and bench/bench_rigid_rain.
+// Needs libccd (link drape::rigid).
+
+#include <drape/drape.hpp>
+#include <drape/rigid/coupled.hpp>
+#include <drape/sdf/convex.hpp>  // the bodies' own distance fields (bodyPenetrationAtBodies)
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <numbers>
+#include <random>
+#include <string>
+#include <type_traits>
+#include <variant>
+#include <vector>
+
+namespace drape::scenes {
+
+/// The shapes the rain draws from, as bits of RainConfig::shapes.
+enum class RainShape : unsigned { Sphere = 1, Box = 2, Capsule = 4, Cylinder = 8, Hull = 16 };
+inline constexpr unsigned kAllRainShapes = 31;
+inline constexpr std::array<RainShape, 5> kRainShapes{RainShape::Sphere, RainShape::Box, RainShape::Capsule,
+                                                     RainShape::Cylinder, RainShape::Hull};
+
+inline const char* toString(RainShape s) {
+  switch (s) {
+    case RainShape::Sphere: return "sphere";
+    case RainShape::Box: return "box";
+    case RainShape::Capsule: return "capsule";
+    case RainShape::Cylinder: return "cylinder";
+    case RainShape::Hull: return "hull";
+  }
+  return "?";
+}
+/// The RainShape named by toString, or throws drape::Error.
+inline RainShape rainShapeFromString(const std::string& name) {
+  for (RainShape s : kRainShapes)
+    if (name == toString(s)) return s;
+  throw Error("unknown rain shape '" + name + "' (sphere, box, capsule, cylinder, hull)");
+}
+/// The ContactForce named by toString(ContactForce), or throws drape::Error.
+inline ContactForce contactForceFromString(const std::string& name) {
+  for (ContactForce f : {ContactForce::SubForce, ContactForce::Energy, ContactForce::Impulse})
+    if (name == toString(f)) return f;
+  throw Error("unknown contact force estimator '" + name + "' (sub-force, energy, impulse)");
+}
+
+/// The RainShape bits whose bodies `ClothSolver` can take as solids (addCoupledBody needs the shape type).
+template <class ClothSolver> constexpr unsigned supportedRainShapes() {
+  return (ClothSolver::template kHasShape<Sphere> ? unsigned(RainShape::Sphere) : 0u) |
+         (ClothSolver::template kHasShape<Box> ? unsigned(RainShape::Box) : 0u) |
+         (ClothSolver::template kHasShape<Capsule> ? unsigned(RainShape::Capsule) : 0u) |
+         (ClothSolver::template kHasShape<Cylinder> ? unsigned(RainShape::Cylinder) : 0u) |
+         (ClothSolver::template kHasShape<ConvexHull> ? unsigned(RainShape::Hull) : 0u);
+}
+/// The names of the shapes in a RainShape mask, comma-separated.
+inline std::string rainShapeNames(unsigned shapes) {
+  std::string out;
+  for (RainShape s : kRainShapes)
+    if (shapes & unsigned(s)) out += (out.empty() ? "" : ",") + std::string(toString(s));
+  return out;
+}
+
+struct RainConfig {
+  int bodies = 20;
+  std::uint32_t seed = 1;
+  ContactForce estimator = ContactForce::Impulse;
+  unsigned shapes = kAllRainShapes;  ///< RainShape bits; each body's shape is drawn uniformly from the set ones
+  int nx = 50, ny = 80;              ///< cloth vertices along x and y
+  double spacing = 0.02;             ///< m
+  double clothHeight = 0.5;          ///< m above the floor
+  double areaDensity = 0.1;          ///< kg/m^2
+  double dt = 0.01;                  ///< s per step (the thesis's)
+  int subSteps = 10;
+  double release = 1.5;  ///< s: the corners are let go before the first step that starts at or after it
+  double minSize = 0.03, maxSize = 0.08;  ///< m: a body's size d, its largest dimension (see makeRainBody)
+  double minDrop = 0.7, maxDrop = 2.0;    ///< m: heights of the bodies' centres at the start
+  double maxSpeed = 1.5;                  ///< m/s: largest initial speed (random direction)
+  double maxSpin = 5;                     ///< rad/s: largest initial angular speed (random axis)
+  double density = 500;                   ///< kg/m^3 of every body
+  double bodyFriction = 0.3;   ///< cloth against the bodies (static and dynamic)
+  double floorFriction = 0.5;  ///< cloth against the floor (static and dynamic)
+  Settings base{};             ///< cloth settings besides subStepCount and contactForce (threadCount 1 by default)
+  RigidSettings rigid{};       ///< the world's (its ground at z = 0; subStepCount is not used by stepCoupled)
+
+  void validate() const {
+    using detail::require;
+    require(bodies >= 0 && bodies <= 10000, "bodies must be in [0, 10000] (got " + std::to_string(bodies) + ")");
+    require(shapes != 0 && (shapes & ~kAllRainShapes) == 0, "shapes must name at least one rain shape");
+    require(nx >= 2 && ny >= 2, "nx and ny must be >= 2");
+    require(std::isfinite(spacing) && spacing > 0, "spacing must be positive");
+    require(std::isfinite(clothHeight) && clothHeight > 0, "clothHeight must be positive");
+    require(std::isfinite(dt) && dt > 0, "dt must be positive");
+    require(subSteps >= 1, "subSteps must be >= 1");
+    require(!std::isnan(release) && release >= 0, "release must be >= 0 s (infinity: never)");
+    require(std::isfinite(minSize) && minSize > 0 && minSize <= maxSize && std::isfinite(maxSize),
+            "sizes must satisfy 0 < minSize <= maxSize");
+    require(std::isfinite(minDrop) && std::isfinite(maxDrop) && minDrop <= maxDrop, "drop heights: minDrop <= maxDrop");
+    require(std::isfinite(maxSpeed) && maxSpeed >= 0 && std::isfinite(maxSpin) && maxSpin >= 0,
+            "maxSpeed and maxSpin must be >= 0");
+    require(std::isfinite(density) && density > 0, "density must be positive");
+  }
+};
+
+namespace rain_detail {
+
+inline double uniform(std::mt19937& rng, double a, double b) { return std::uniform_real_distribution<double>(a, b)(rng); }
+
+/// A unit vector uniform on the sphere.
+inline Eigen::Vector3d randomDirection(std::mt19937& rng) {
+  const double z = uniform(rng, -1, 1), phi = uniform(rng, 0, 2 * std::numbers::pi);
+  const double r = std::sqrt(std::max(0.0, 1 - z * z));
+  return {r * std::cos(phi), r * std::sin(phi), z};
+}
+
+/// A rotation uniform over SO(3) (Shoemake), from `rng` (Eigen's UnitRandom uses std::rand).
+inline Eigen::Quaterniond randomRotation(std::mt19937& rng) {
+  const double u1 = uniform(rng, 0, 1), u2 = uniform(rng, 0, 2 * std::numbers::pi),
+               u3 = uniform(rng, 0, 2 * std::numbers::pi);
+  const double a = std::sqrt(1 - u1), b = std::sqrt(u1);
+  return Eigen::Quaterniond(b * std::cos(u3), a * std::sin(u2), a * std::cos(u2), b * std::sin(u3)).normalized();
+}
+
+}  // namespace rain_detail
+
+/// A body's shape of size d (m, its largest dimension): a sphere of diameter d; a box with one edge d and the
+/// others 0.5-1 d; a capsule d long, 0.35-0.6 d wide; a cylinder whose diameter and length are each 0.5-1 d,
+/// one of them d; a convex hull of 12 points at 0.6-1 times d/2 from the centre in random directions.
+inline RigidShape makeRainShape(RainShape kind, double d, std::mt19937& rng) {
+  using rain_detail::uniform;
+  const double h = 0.5 * d;
+  switch (kind) {
+    case RainShape::Sphere: return Sphere{h};
+    case RainShape::Box: return Box{Eigen::Vector3d(h, h * uniform(rng, 0.5, 1), h * uniform(rng, 0.5, 1))};
+    case RainShape::Capsule: {
+      const double r = h * uniform(rng, 0.35, 0.6);
+      return Capsule{r, h - r};
+    }
+    case RainShape::Cylinder: {
+      const double other = h * uniform(rng, 0.5, 1);
+      return uniform(rng, 0, 1) < 0.5 ? Cylinder{h, other} : Cylinder{other, h};
+    }
+    case RainShape::Hull: {
+      std::vector<Eigen::Vector3d> points;
+      for (int k = 0; k < 12; ++k) points.push_back(h * uniform(rng, 0.6, 1) * rain_detail::randomDirection(rng));
+      return ConvexHull(points);  // 12 points on distinct random directions span a volume (almost surely)
+    }
+  }
+  throw Error("makeRainShape: not a rain shape");
+}
+
+/// The scene. Not copyable or movable: the cloth's dynamic solids point at the world's bodies.
+template <Scalar S, class ClothSolver = Solver<S>> class RigidRain {
+ public:
+  explicit RigidRain(const RainConfig& c)
+      : config_((c.validate(), c)),
+        world_(c.rigid),
+        cloth_(makeAsset(c), clothSettings(c), c.areaDensity) {
+    // The corners, pinned until the release; their inverse masses are kept to give back.
+    const Index nx = c.nx, ny = c.ny;
+    corners_ = {0, nx - 1, (ny - 1) * nx, ny * nx - 1};
+    for (Index i : corners_) {
+      cornerInvMass_.push_back(double(cloth_.state().invMass[i]));
+      cloth_.pin(i);
+    }
+    Solid<Plane> floor;  // z = 0, the world's ground as well
+    floor.staticFriction = floor.dynamicFriction = c.floorFriction;
+    cloth_.addSolid(floor);
+
+    std::mt19937 rng(c.seed);
+    using rain_detail::uniform;
+    std::vector<RainShape> allowed;
+    for (RainShape s : kRainShapes)
+      if (c.shapes & unsigned(s)) allowed.push_back(s);
+    const double halfX = 0.5 * (c.nx - 1) * c.spacing, halfY = 0.5 * (c.ny - 1) * c.spacing;
+    std::vector<Eigen::Vector3d> centres;
+    std::vector<double> radii;
+    CouplingDesc coupling;
+    coupling.staticFriction = coupling.dynamicFriction = c.bodyFriction;
+    for (int i = 0; i < c.bodies; ++i) {
+      const RainShape kind = allowed[std::uniform_int_distribution<std::size_t>(0, allowed.size() - 1)(rng)];
+      BodyDesc b;
+      b.shape = makeRainShape(kind, uniform(rng, c.minSize, c.maxSize), rng);
+      const double r = drape::detail::boundingRadius(b.shape);
+      // Over the cloth (centres at least r inside its edges), not overlapping any earlier body.
+      bool placed = false;
+      for (int attempt = 0; attempt < 100000 && !placed; ++attempt) {
+        const Eigen::Vector3d p(uniform(rng, -halfX + r, halfX - r), uniform(rng, -halfY + r, halfY - r),
+                                uniform(rng, c.minDrop, c.maxDrop));
+        placed = true;
+        for (std::size_t k = 0; k < centres.size() && placed; ++k)
+          placed = (p - centres[k]).norm() > r + radii[k] + 0.005;
+        if (placed) b.pose.position = p;
+      }
+      drape::detail::require(placed, "rigid rain: no room for body " + std::to_string(i) +
+                                         " without overlapping another; use fewer bodies or a larger drop range");
+      centres.push_back(b.pose.position);
+      radii.push_back(r);
+      b.pose.rotation = rain_detail::randomRotation(rng);
+      b.linearVelocity = uniform(rng, 0, c.maxSpeed) * rain_detail::randomDirection(rng);
+      b.angularVelocity = uniform(rng, 0, c.maxSpin) * rain_detail::randomDirection(rng);
+      b.density = c.density;
+      const int index = world_.add(b);
+      const bool supported = std::visit(
+          [](const auto& shape) { return ClothSolver::template kHasShape<std::decay_t<decltype(shape)>>; },
+          b.shape);
+      drape::detail::require(supported, std::string("rigid rain: this build's cloth solver has no distance field for ") +
+                                            toString(kind) + " bodies; leave " + toString(kind) + " out of the shapes");
+      addCoupledBody(cloth_, world_, index, coupling);
+      kinds_.push_back(kind);
+    }
+  }
+  RigidRain(const RigidRain&) = delete;
+  RigidRain& operator=(const RigidRain&) = delete;
+
+  /// One stepCoupled of config().dt, the corners let go first when it is time.
+  void step() {
+    if (!released_ && time_ >= config_.release - 1e-9) release();
+    stepCoupled(cloth_, world_, config_.dt);
+    time_ += config_.dt;
+  }
+  /// Gives the corners back their inverse masses (once).
+  void release() {
+    if (released_) return;
+    for (std::size_t k = 0; k < corners_.size(); ++k) cloth_.setInverseMass(corners_[k], cornerInvMass_[k]);
+    released_ = true;
+  }
+
+  const RainConfig& config() const { return config_; }
+  ClothSolver& cloth() { return cloth_; }
+  const ClothSolver& cloth() const { return cloth_; }
+  RigidWorld& world() { return world_; }
+  const RigidWorld& world() const { return world_; }
+  double time() const { return time_; }
+  bool released() const { return released_; }
+  const std::vector<Index>& corners() const { return corners_; }
+  /// Body k's shape kind (body k of world()).
+  const std::vector<RainShape>& kinds() const { return kinds_; }
+
+ private:
+  static std::shared_ptr<const ClothAsset<S>> makeAsset(const RainConfig& c) {
+    GridDesc grid;
+    grid.nx = c.nx;
+    grid.ny = c.ny;
+    grid.spacing = c.spacing;
+    grid.placement.position = Eigen::Vector3d(0, 0, c.clothHeight);
+    return std::make_shared<const ClothAsset<S>>(ClothAsset<S>::grid(grid));
+  }
+  static Settings clothSettings(const RainConfig& c) {
+    Settings s = c.base;
+    s.subStepCount = c.subSteps;
+    s.contactForce = c.estimator;
+    return s;
+  }
+
+  RainConfig config_;
+  RigidWorld world_;
+  ClothSolver cloth_;
+  std::vector<Index> corners_;
+  std::vector<double> cornerInvMass_;
+  std::vector<RainShape> kinds_;
+  double time_ = 0;
+  bool released_ = false;
+};
+
+/// Deepest cloth vertex inside any coupled body (m, 0 if none), with the distance fields the cloth solved
+/// against in the last substep (forEachSolid; a dynamic solid sits where its body was carried to at that
+/// substep's end). The floor plane is left out. Vertices further than `cullRadius` from a solid's centre (at
+/// least the largest body's bounding radius) are skipped: they cannot be inside.
+template <class ClothSolver> double bodyPenetration(const ClothSolver& cloth, double cullRadius) {
+  using S = typename ClothSolver::scalar_type;
+  const auto& x = cloth.state().x;
+  const S r2 = S(cullRadius * cullRadius);
+  double minPhi = 0;
+  cloth.forEachSolid([&](const auto& solid) {
+    if constexpr (!std::is_same_v<std::decay_t<decltype(solid)>, CompiledSolid<Plane, S>>) {
+      for (const auto& p : x) {
+        if ((p - solid.motion.centre).squaredNorm() > r2) continue;
+        Vec3<S> n;
+        minPhi = std::min(minPhi, double(solid.sdf(p, n)));
+      }
+    }
+  });
+  return -minPhi;
+}
+
+/// The same against the bodies where they are now (after the world's last substep), from their own shapes.
+template <class ClothSolver> double bodyPenetrationAtBodies(const ClothSolver& cloth, const RigidWorld& world) {
+  using S = typename ClothSolver::scalar_type;
+  const auto& x = cloth.state().x;
+  const Eigen::Vector3d origin = cloth.state().origin;
+  double minPhi = 0;
+  for (int b = 0; b < world.bodyCount(); ++b) {
+    const RigidBody& body = world.body(b);
+    const Pose pose = body.pose();
+    const Vec3<S> centre = (pose.position - origin).template cast<S>();
+    const S r2 = S(body.boundingRadius() * body.boundingRadius());
+    std::visit(
+        [&](const auto& shape) {
+          const auto sdf = drape::detail::compileSdf<S>(shape, pose, origin);
+          for (const auto& p : x) {
+            if ((p - centre).squaredNorm() > r2) continue;
+            Vec3<S> n;
+            minPhi = std::min(minPhi, double(sdf(p, n)));
+          }
+        },
+        body.shape());
+  }
+  return -minPhi;
+}
+
+}  // namespace drape::scenes
