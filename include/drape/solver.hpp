@@ -143,6 +143,7 @@ template <Scalar S, class... Shapes> class BasicSolver {
     detail::require(k >= 0 && k < Index(list.size()), "solid index " + std::to_string(k) + " out of range");
     detail::validateSolid(s, "solid " + std::to_string(k));
     list[k] = s;
+    std::get<std::vector<CompiledSolid<Shape, S>>>(compiled_)[k] = {};  // the shape may differ: nothing kept
   }
   /// Calls f(const CompiledSolid<Shape, S>&) for every solid, compiled at the current local origin.
   template <class F> void forEachSolid(F&& f) const {
@@ -230,7 +231,7 @@ template <Scalar S, class... Shapes> class BasicSolver {
                   repulsive_ = repulsive_ || list[k].repulsion.radius > 0;
                   reconcile_ = reconcile_ || !Sdf<Shape, S>::kLinear;
                   detail::advancePose(list[k], h);
-                  out[k] = detail::compileSolid<Shape, S>(list[k], state_.origin);
+                  detail::recompileSolid<Shape, S>(out[k], list[k], state_.origin);
                   if (list[k].motion == Motion::Dynamic) {
                     out[k].motion.body = std::int32_t(bodies_.size());
                     bodies_.push_back(list[k].body);
@@ -597,7 +598,8 @@ template <Scalar S, class... Shapes> class BasicSolver {
   std::vector<Vec3<S>> vStart_, vPre_;                  ///< velocities at the substep's start, before contacts
 };
 
-/// The solver with every built-in shape, grid distance fields from meshes included.
-template <Scalar S> using Solver = BasicSolver<S, Plane, Sphere, Box, Capsule, MeshShape>;
+/// The solver with every built-in shape: the analytic ones, the rigid bodies' cylinders and convex hulls, and
+/// grid distance fields from meshes.
+template <Scalar S> using Solver = BasicSolver<S, Plane, Sphere, Box, Capsule, Cylinder, ConvexHull, MeshShape>;
 
 }  // namespace drape

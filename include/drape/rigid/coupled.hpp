@@ -33,8 +33,7 @@ Index addCoupledBody(ClothSolver& cloth, RigidWorld& world, int index, const Cou
       [&](const auto& shape) -> Index {
         using Shape = std::decay_t<decltype(shape)>;
         if constexpr (ClothSolver::template kHasShape<Shape>) {
-          Solid<Shape> solid;
-          solid.shape = shape;
+          Solid<Shape> solid{shape};  // a hull has no default to start from
           solid.pose = body.pose();
           solid.motion = Motion::Dynamic;
           solid.body = &body;

@@ -9,9 +9,6 @@
 //
 // validateShape(const Cylinder&) (radius and halfHeight positive and finite) and validateShape(const
 // ConvexHull&) (nothing: the hull is checked when it is built) are declared in drape/rigid/shapes.hpp.
-//
-// Note for solids: compileSolid (drape/sdf/solid.hpp) finds compileSdf by ordinary lookup, so this header must
-// be included before drape/sdf/solid.hpp for a Solid<Cylinder> or Solid<ConvexHull> to compile.
 
 #include <drape/math.hpp>
 #include <drape/rigid/shapes.hpp>
@@ -213,11 +210,23 @@ template <Scalar S> Sdf<Cylinder, S> compileSdf(const Cylinder& c, const Pose& p
           S(c.radius), S(c.halfHeight)};
 }
 /// Builds the hull's query data each call (a few allocations and O(hull size) work); a caller that compiles
-/// the same hull every substep may instead compile once and update toLocal and centre.
+/// the same hull every substep uses refreshSdf, which builds it once.
 template <Scalar S>
 Sdf<ConvexHull, S> compileSdf(const ConvexHull& h, const Pose& pose, const Eigen::Vector3d& origin) {
   return {pose.rotation.toRotationMatrix().transpose().template cast<S>(), (pose.position - origin).template cast<S>(),
           makeHullField<S>(h)};
+}
+
+/// Recompiles a hull's field for a new pose, keeping the query data it was built with (see refreshSdf in
+/// drape/sdf/solid.hpp); a default field (no data yet) is compiled from scratch.
+template <Scalar S>
+void refreshSdf(Sdf<ConvexHull, S>& sdf, const ConvexHull& hull, const Pose& pose, const Eigen::Vector3d& origin) {
+  if (!sdf.hull) {
+    sdf = compileSdf<S>(hull, pose, origin);
+    return;
+  }
+  sdf.toLocal = pose.rotation.toRotationMatrix().transpose().template cast<S>();
+  sdf.centre = (pose.position - origin).template cast<S>();
 }
 
 }  // namespace detail

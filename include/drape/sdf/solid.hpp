@@ -2,7 +2,8 @@
 // A solid: a shape, a pose, how it moves, and its friction with the cloth.
 
 #include <drape/rigid/coupling.hpp>
-#include <drape/sdf/grid.hpp>  // every shape's compileSdf must be declared before compileSolid
+#include <drape/sdf/convex.hpp>  // every shape's compileSdf must be declared before compileSolid
+#include <drape/sdf/grid.hpp>
 #include <drape/sdf/shapes.hpp>
 
 #include <cstdint>
@@ -101,6 +102,25 @@ CompiledSolid<Shape, S> compileSolid(const Solid<Shape>& s, const Eigen::Vector3
            S(s.staticFriction), S(s.dynamicFriction)},
           S(s.repulsion.radius),
           s.repulsion.falloff};
+}
+
+/// Recompiles `sdf` for a new pose. Every field is rebuilt, except that a hull keeps the query data it was
+/// built with (its overload is in convex.hpp): the caller resets `sdf` to a default one when the shape itself changes.
+template <Scalar S, class Shape>
+void refreshSdf(Sdf<Shape, S>& sdf, const Shape& shape, const Pose& pose, const Eigen::Vector3d& origin) {
+  sdf = compileSdf<S>(shape, pose, origin);
+}
+
+/// Compiles a solid for a new substep into `out`, which holds its compilation of the last substep (or a
+/// default one): a field whose data depends on the shape alone (a hull's planes and edges) keeps it and only
+/// takes the new pose (refreshSdf), so stepping a hull allocates nothing.
+template <class Shape, Scalar S>
+void recompileSolid(CompiledSolid<Shape, S>& out, const Solid<Shape>& s, const Eigen::Vector3d& origin) {
+  refreshSdf<S>(out.sdf, s.shape, s.pose, origin);
+  out.motion = {(s.pose.position - origin).template cast<S>(), s.linearVelocity.template cast<S>(),
+                s.angularVelocity.template cast<S>(), S(s.staticFriction), S(s.dynamicFriction)};
+  out.repulsionRadius = S(s.repulsion.radius);
+  out.falloff = s.repulsion.falloff;
 }
 
 /// Advances a kinematic solid's pose by its velocities over h seconds (exact for constant velocities). A
