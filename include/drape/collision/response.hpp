@@ -203,13 +203,14 @@ inline constexpr double kReach = 4;            ///< farthest accepted move to th
 /// among the projections onto every subset of the planes, which is the exact projection onto their
 /// intersection. The planes are tangents of curved surfaces, so far from y0 they say nothing: two nearly
 /// facing planes (a cloth pinched under a box whose merged normal is tilted a little) meet far away, and going
-/// there would throw the point sideways. A candidate further than `reach` times the total violation counts as
+/// there would throw the point sideways. A candidate further than kReach times the total violation (or than
+/// `minReach`, if that is more) counts as
 /// none; where there is none (also when the half-spaces do not meet, as in a gap narrower than twice the
 /// thickness), the answer is the least-squares compromise reached by Jacobi steps on
 /// sum_k max(0, b_k - n_k . y)^2 from `fallback` (between two facing planes, the middle of the gap).
 template <Scalar S>
 Vec3<S> nearestInHalfSpaces(const Vec3<S>* n, const S* b, int count, const Vec3<S>& y0, const Vec3<S>& fallback,
-                            S reach = S(kReach)) {
+                            S minReach = S(0)) {
   auto feasible = [&](const Vec3<S>& y) {
     for (int k = 0; k < count; ++k)
       if (n[k].dot(y) < b[k] - S(1e-6) * std::max(S(1), std::abs(b[k]))) return false;
@@ -218,7 +219,8 @@ Vec3<S> nearestInHalfSpaces(const Vec3<S>* n, const S* b, int count, const Vec3<
   if (feasible(y0)) return y0;
   S violation = 0;
   for (int k = 0; k < count; ++k) violation += std::max(b[k] - n[k].dot(y0), S(0));
-  const S reach2 = reach * reach * violation * violation;
+  const S reach = std::max(S(kReach) * violation, minReach);
+  const S reach2 = reach * reach;
   Vec3<S> best = y0;
   S bestDist = std::numeric_limits<S>::infinity();
   auto consider = [&](const Vec3<S>& y) {
@@ -334,7 +336,9 @@ void respondContacts(ContactBuffer<S>& contacts, Vec3<S>* x, const Vec3<S>* xPre
         normals[k] = c.normal;
         bounds[k] = c.normal.dot(c.solidVelocity);
       }
-      v[i] = nearestInHalfSpaces(normals, bounds, count, v[i], v[i], std::numeric_limits<S>::infinity());
+      // A velocity may lose all of itself (a vertex driven into a wedge stops), but a surface closing in on
+      // the cloth must not fling it sideways along a far meeting line.
+      v[i] = nearestInHalfSpaces(normals, bounds, count, v[i], v[i], v[i].norm());
     }
     contacts.normalDv[i] = dvnSum;
   }
