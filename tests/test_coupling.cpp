@@ -31,13 +31,14 @@ TEMPLATE_TEST_CASE("Newton's third law: a ball hitting a free cloth in empty spa
                    "[coupling]", float, double) {
   using S = TestType;
   // Measured (double, 0.4 s, the ball carries 0.18 kg m/s and gives the cloth about 10 % of it): relative
-  // error of the total momentum 0.7 % (impulse), 0.9 % (energy), 3.6 % (sub-force, which does not see the
-  // particles' own momentum), with propagation on (one ring); with the repulsion region as well, 0.1 %, 2.0 %, 0.2 %.
+  // error of the total momentum 0.7 % (impulse), 3.3 % (energy, whose force is capped by the momentum
+  // balance), 3.6 % (sub-force, which does not see the particles' own momentum), with propagation on (one
+  // ring); with the repulsion region as well, about 0.1 %, 2 % and 0.2 %.
   struct Case {
     drape::ContactForce estimator;
     double tolerance;
   };
-  for (const Case c : {Case{drape::ContactForce::Impulse, 0.015}, Case{drape::ContactForce::Energy, 0.03},
+  for (const Case c : {Case{drape::ContactForce::Impulse, 0.015}, Case{drape::ContactForce::Energy, 0.05},
                        Case{drape::ContactForce::SubForce, 0.06}}) {
     for (const double repulsion : {0.0, 0.03}) {
       drape::Settings settings;
@@ -104,5 +105,103 @@ TEMPLATE_TEST_CASE("a box resting on a cloth on the ground gets its weight back 
     CHECK(mean.head<2>().norm() <= 0.05 * weight);
     CHECK(lowest > settings.thickness);  // held by the cloth, never down to the floor
     CHECK(fastest < 0.05);
+  }
+}
+
+TEMPLATE_TEST_CASE("a very heavy body is not moved by the cloth, which slides off it as off a fixed ball", "[coupling]",
+                   float, double) {
+  using S = TestType;
+  // A 0.1 m ball of 4 t resting on the ground; the same ball as a static solid. A 0.3 m cloth falls on it off
+  // centre and slides off.
+  auto run = [](bool coupled, double& bodyMoved, double& fastestLate) {
+    drape::Solver<S> cloth(squareCloth<S>(15, 0.02, 0.35));
+    cloth.addSolid(drape::Solid<drape::Plane>{});
+    drape::RigidWorld world;
+    drape::BodyDesc heavy;
+    heavy.shape = drape::Sphere{0.1};
+    heavy.pose.position = {0.06, 0.02, 0.1};
+    heavy.density = 1e6;
+    const int b = world.add(heavy);
+    if (coupled) {
+      drape::addCoupledBody(cloth, world, b);
+    } else {
+      drape::Solid<drape::Sphere> ball;
+      ball.shape.radius = 0.1;
+      ball.pose.position = heavy.pose.position;
+      cloth.addSolid(ball);
+    }
+    fastestLate = 0;
+    for (int s = 0; s < 100; ++s) {
+      if (coupled)
+        drape::stepCoupled(cloth, world, 0.01);
+      else
+        cloth.step(0.01);
+      if (s >= 80)
+        for (drape::Index i = 0; i < cloth.vertexCount(); ++i)
+          fastestLate = std::max(fastestLate, cloth.velocity(i).norm());
+    }
+    bodyMoved = (world.body(b).pose().position - heavy.pose.position).norm();
+    std::vector<Eigen::Vector3d> out;
+    for (drape::Index i = 0; i < cloth.vertexCount(); ++i) out.push_back(cloth.position(i));
+    return out;
+  };
+  double moved = 0, fastestCoupled = 0, unused = 0, fastestFixed = 0;
+  const auto coupled = run(true, moved, fastestCoupled);
+  const auto fixed = run(false, unused, fastestFixed);
+  double centreZ = 0, fixedZ = 0;
+  for (const auto& p : coupled) centreZ += p.z() / double(coupled.size());
+  for (const auto& p : fixed) fixedZ += p.z() / double(fixed.size());
+  // The slide off is chaotic: the two runs end about a centimetre apart vertex by vertex, so they are compared
+  // on the body's motion, the cloth's height and its speed.
+  INFO("the body moved " << moved << " m; cloth mean height " << centreZ << " m (fixed ball: " << fixedZ
+                         << "); fastest vertex over the last "
+                         << "0.2 s " << fastestCoupled << " m/s (fixed ball: " << fastestFixed
+                         << ")");
+  CHECK(moved <= 1e-5);
+  CHECK(std::abs(centreZ - fixedZ) <= 5e-3);
+  CHECK(centreZ <= 0.1);  // slid off the ball's top (0.2 m) toward the floor
+  CHECK(fastestCoupled <= fastestFixed + 0.05);
+}
+
+TEST_CASE("Fig 6.5: a cloth launches a light ball; the three estimators' launch heights", "[coupling]") {
+  // A 0.4 m cloth pinned along two opposite edges, made springy (stretch compliance 1e-3 m/N); a 20 g ball
+  // falls 0.3 m onto it, and the cloth throws it back up. Reported: the top of its flight after the bounce.
+  // Asserted: each estimator launches it, and none gives back more than the drop's energy. Measured: sub-force
+  // 0.337 m, energy 0.342 m, impulse 0.278 m. The thesis found sub-force highest and energy lowest; here the
+  // energy estimate is as high as the sub-force one (the cloth is springy, so the work done on the particles
+  // along their displacement is what throws the ball) and the impulse one, which passes on exactly the momentum
+  // the contacts took from the particles, lowest.
+  const double drop = 0.3;
+  for (const auto estimator : {drape::ContactForce::SubForce, drape::ContactForce::Energy, drape::ContactForce::Impulse}) {
+    drape::Settings settings;
+    settings.contactForce = estimator;
+    settings.stretchCompliance = 1e-3;
+    settings.shearCompliance = 1e-3;
+    const drape::Index n = 21;
+    drape::Solver<double> cloth(squareCloth<double>(int(n), 0.02, 0.2), settings);
+    for (drape::Index k = 0; k < n; ++k) cloth.pin(k), cloth.pin(n * (n - 1) + k);
+    drape::RigidWorld world;
+    drape::BodyDesc ball;
+    ball.shape = drape::Sphere{0.03};
+    ball.pose.position = {0.004, -0.003, 0.2 + drape::Settings{}.thickness + 0.03 + drop};
+    ball.mass = drape::MassProperties{0.02, Eigen::Matrix3d::Identity() * (0.4 * 0.02 * 0.03 * 0.03)};
+    const int b = world.add(ball);
+    drape::addCoupledBody(cloth, world, b);
+    const double start = world.body(b).pose().position.z();
+    double lowest = start, top = -1e9;
+    bool rising = false;
+    for (int s = 0; s < 150; ++s) {
+      drape::stepCoupled(cloth, world, 0.01);
+      const double z = world.body(b).pose().position.z(), vz = world.body(b).linearVelocity().z();
+      lowest = std::min(lowest, z);
+      if (vz > 0 && z < 0.25) rising = true;
+      if (rising) top = std::max(top, z);
+      if (rising && vz < 0) break;  // past the top of the flight
+    }
+    const double launch = top - lowest;
+    WARN(drape::toString(estimator) << ": the ball dropped " << drop << " m, fell to " << lowest << " m and was thrown "
+                                    << launch << " m up (to " << top << " m)");
+    CHECK(rising);
+    CHECK(top <= start + 1e-3);  // no more energy out than in
   }
 }

@@ -429,6 +429,12 @@ template <Scalar S, class... Shapes> class BasicSolver {
         const S d2 = d.squaredNorm();
         const S work = S(0.5) * m * (v.squaredNorm() - vStart_[i].squaredNorm()) - otherForce.dot(d);
         if (d2 > S(1e-24)) energyForce = (work / d2) * d;
+        // Over a tiny displacement the work / |d| quotient is unbounded (a particle held still under a body
+        // launched it at 400 m/s). The contact's force cannot exceed what the momentum balance allows,
+        // |m (v - v_start) / h - F_other|, so its magnitude is capped there; its direction stays along d.
+        const S cap = (m * (v - vStart_[i]) / h - otherForce).norm();
+        const S size = energyForce.norm();
+        if (size > cap) energyForce *= cap / size;
       }
       for (int k = 0; k < count; ++k) {
         const ContactSlot<S>& c = slots[k];
