@@ -5,6 +5,7 @@
 
 #include <drape/cloth/asset.hpp>
 #include <drape/cloth/state.hpp>
+#include <drape/collision/broadphase.hpp>
 #include <drape/collision/pgd.hpp>
 #include <drape/collision/response.hpp>
 #include <drape/constraints/distance.hpp>
@@ -50,6 +51,12 @@ template <Scalar S, class... Shapes> class BasicSolver {
     lambdaBending_.resize(asset_->bending.size());
     contacts_.resize(n);
     propagation_.resize(n);
+    // Grid cells of two mean edge lengths: a cell holds a few vertices of a flat cloth.
+    double edgeSum = 0;
+    for (const auto& e : asset_->edges)
+      edgeSum += double((asset_->restPositions[e[1]] - asset_->restPositions[e[0]]).norm());
+    const double meanEdge = asset_->edges.empty() ? 1.0 : edgeSum / double(asset_->edges.size());
+    grid_.setTopology(asset_->triangles, n, S(2 * std::max(meanEdge, 1e-6)));
   }
 
   // --- settings -------------------------------------------------------------------------------------------
@@ -143,7 +150,8 @@ template <Scalar S, class... Shapes> class BasicSolver {
     detail::require(k >= 0 && k < Index(list.size()), "solid index " + std::to_string(k) + " out of range");
     detail::validateSolid(s, "solid " + std::to_string(k));
     list[k] = s;
-    std::get<std::vector<CompiledSolid<Shape, S>>>(compiled_)[k] = {};  // the shape may differ: nothing kept
+    // The shape may differ: nothing of the old compilation is kept.
+    std::get<std::vector<CompiledSolid<Shape, S>>>(compiled_)[k] = detail::compileSolid<Shape, S>(s, state_.origin);
   }
   /// Calls f(const CompiledSolid<Shape, S>&) for every solid, compiled at the current local origin.
   template <class F> void forEachSolid(F&& f) const {
@@ -220,6 +228,7 @@ template <Scalar S, class... Shapes> class BasicSolver {
     bodies_.clear();
     bodyCentre_.clear();
     reconcile_ = solidCount() > 1;
+    int bounded = 0;
     std::apply(
         [&](auto&... lists) {
           (
@@ -232,6 +241,7 @@ template <Scalar S, class... Shapes> class BasicSolver {
                   reconcile_ = reconcile_ || !Sdf<Shape, S>::kLinear;
                   detail::advancePose(list[k], h);
                   detail::recompileSolid<Shape, S>(out[k], list[k], state_.origin);
+                  bounded += out[k].bounded ? 1 : 0;
                   if (list[k].motion == Motion::Dynamic) {
                     out[k].motion.body = std::int32_t(bodies_.size());
                     bodies_.push_back(list[k].body);
@@ -244,6 +254,9 @@ template <Scalar S, class... Shapes> class BasicSolver {
         solids_);
     for (std::size_t k = 0; k < pins_.size(); ++k)
       pinLocal_[k].target = (pins_[k].target - state_.origin).template cast<S>();
+    gridded_ = settings_.broadPhase == BroadPhase::Always ? bounded > 0
+               : settings_.broadPhase == BroadPhase::Auto ? bounded > 1
+                                                          : false;
     coupled_ = !bodies_.empty();
     bodyForce_.assign(bodies_.size(), Eigen::Vector3d::Zero());
     bodyTorque_.assign(bodies_.size(), Eigen::Vector3d::Zero());
@@ -257,9 +270,15 @@ template <Scalar S, class... Shapes> class BasicSolver {
     prepareSolids(hd);
     stats_ = {};
     const int threads = settings_.threadCount == 0 ? hardwareThreads() : settings_.threadCount;
-    // One team for the whole substep: the loops inside are work-shared, so the team is made once.
-    DRAPE_OMP(parallel num_threads(threads) if (threads > 1))
-    subStepBody(S(hd));
+    // One team for the whole substep: the loops inside are work-shared, so the team is made once. One thread
+    // opens no team: outside one the directives cost nothing, while a team of one still pays libgomp's barrier
+    // (a futex wake-up each) for every work-shared loop.
+    if (threads > 1) {
+      DRAPE_OMP(parallel num_threads(threads))
+      subStepBody(S(hd));
+    } else {
+      subStepBody(S(hd));
+    }
   }
 
   void subStepBody(const S h) {
@@ -506,17 +525,54 @@ template <Scalar S, class... Shapes> class BasicSolver {
 
   /// Projects every vertex, then (when kFaces and the field is not linear) every face, out of each solid in
   /// turn, recording the contacts. On a linear field a face is deepest at a vertex, which the vertex pass has
-  /// already handled. Vertices already within `slack` of the thickness are left where they are.
+  /// already handled. Vertices already within `slack` of the thickness are left where they are. With the broad
+  /// phase on, a bounded solid visits only the vertices and faces the grid finds near its box.
   template <bool kFaces, bool kCull> void projectContacts(S thickness, S slack = S(0)) {
     Vec3<S>* x = state_.x.data();
     const S* w = state_.invMass.data();
+    const Index n = vertexCount();
     forEachCompiled([&](auto& list) {
       for (const auto& solid : list) {
-        projectVertexContacts(solid, thickness, x, w, vertexCount(), contacts_, stats_, slack);
-        if constexpr (kFaces && !std::decay_t<decltype(solid.sdf)>::kLinear) {
+        constexpr bool kFacePass = kFaces && !std::decay_t<decltype(solid.sdf)>::kLinear;
+        if (gridded_ && solid.bounded) {
           DRAPE_OMP(single)
-          projectFaceContacts<kCull>(solid, thickness, settings_.pgdIterations, asset_->triangles, x, w, contacts_,
-                                     stats_);
+          {
+            if (grid_.stale()) grid_.build(x, asset_->triangles);
+            grid_.vertices(x, solid.boxLow, solid.boxHigh, thickness, nearVertices_);
+          }
+          projectVertexContacts(solid, thickness, x, w, ItemList{nearVertices_.data()}, Index(nearVertices_.size()),
+                                contacts_, stats_, grid_.binned(), moveBound_, slack);
+          DRAPE_OMP(single)
+          {
+            grid_.noteDrift(moveBound_);
+            moveBound_ = 0;
+            if constexpr (kFacePass) {
+              grid_.faces(x, solid.boxLow, solid.boxHigh, thickness, nearFaces_);
+              grid_.noteDrift(projectFaceContacts<kCull>(solid, thickness, settings_.pgdIterations, asset_->triangles,
+                                                         ItemList{nearFaces_.data()}, Index(nearFaces_.size()), x, w,
+                                                         contacts_, stats_, grid_.binned()));
+            }
+          }
+        } else {
+          // Without a grid, the binned positions are the positions: nothing drifts.
+          const Vec3<S>* binned = gridded_ ? grid_.binned() : x;
+          projectVertexContacts(solid, thickness, x, w, AllItems{}, n, contacts_, stats_, binned, moveBound_, slack);
+          if constexpr (kFacePass) {
+            DRAPE_OMP(single)
+            {
+              const S moved = projectFaceContacts<kCull>(solid, thickness, settings_.pgdIterations, asset_->triangles,
+                                                         AllItems{}, Index(asset_->triangles.size()), x, w, contacts_,
+                                                         stats_, binned);
+              if (gridded_) grid_.noteDrift(moved);
+            }
+          }
+          if (gridded_) {
+            DRAPE_OMP(single)
+            {
+              grid_.noteDrift(moveBound_);
+              moveBound_ = 0;
+            }
+          }
         }
       }
     });
@@ -528,7 +584,11 @@ template <Scalar S, class... Shapes> class BasicSolver {
   /// repeat on the true fields until no vertex moves by more than a ten-thousandth of the thickness.
   void projectAllContacts(S thickness, bool faces) {
     DRAPE_OMP(single)
-    contacts_.begin();
+    {
+      contacts_.begin();
+      moveBound_ = 0;
+      if (gridded_) grid_.build(state_.x.data(), asset_->triangles);
+    }
     if (faces && settings_.culling)
       projectContacts<true, true>(thickness);
     else if (faces)
@@ -536,7 +596,7 @@ template <Scalar S, class... Shapes> class BasicSolver {
     else
       projectContacts<false, false>(thickness);
     if (!reconcile_) return;  // a lone plane gives each vertex one surface: nothing to reconcile
-    projectOntoContactPlanes(contacts_, state_.x.data(), xPredicted_.data());
+    settleOntoContactPlanes();
     if (solidCount() < 2) return;
     for (int pass = 0; pass < kSettlePasses; ++pass) {
       // Every thread reads the count here, between two barriers (the one ending the loop above and the one
@@ -545,7 +605,19 @@ template <Scalar S, class... Shapes> class BasicSolver {
       DRAPE_OMP(barrier)
       projectContacts<false, false>(thickness, S(1e-4) * thickness);
       if (stats_.vertexContacts == before) break;
-      projectOntoContactPlanes(contacts_, state_.x.data(), xPredicted_.data());
+      settleOntoContactPlanes();
+    }
+  }
+
+  void settleOntoContactPlanes() {
+    projectOntoContactPlanes(contacts_, state_.x.data(), xPredicted_.data(),
+                             gridded_ ? grid_.binned() : state_.x.data(), moveBound_);
+    if (gridded_) {
+      DRAPE_OMP(single)
+      {
+        grid_.noteDrift(moveBound_);
+        moveBound_ = 0;
+      }
     }
   }
 
@@ -598,6 +670,10 @@ template <Scalar S, class... Shapes> class BasicSolver {
   bool repulsive_ = false;    ///< some solid has a repulsion region this substep
   bool reconcile_ = false;    ///< a vertex may touch several surfaces this substep
   bool coupled_ = false;      ///< some solid is a dynamic body this substep
+  bool gridded_ = false;      ///< contacts with bounded solids go through the grid this substep
+  ClothGrid<S> grid_;
+  std::vector<Index> nearVertices_, nearFaces_;  ///< what the grid found near the current solid
+  S moveBound_ = 0;  ///< the passes' largest vertex moves, summed (shared by the team)
   std::vector<CoupledBody*> bodies_;                    ///< the dynamic solids' bodies, this substep
   std::vector<Eigen::Vector3d> bodyCentre_;             ///< their centres of mass at the substep's start
   std::vector<Eigen::Vector3d> bodyForce_, bodyTorque_;  ///< what the cloth passed to each, this substep

@@ -139,14 +139,37 @@ void repelVertices(const CompiledSolid<Shape, S>& solid, S thickness, const Vec3
   }
 }
 
-/// Moves every free vertex closer than `thickness` (by more than `slack`) out along the normal and records the
-/// contact. A work-shared loop; the counts are added once per thread.
-template <class Shape, Scalar S>
-void projectVertexContacts(const CompiledSolid<Shape, S>& solid, S thickness, Vec3<S>* x, const S* invMass,
-                           Index vertexCount, ContactBuffer<S>& contacts, CollisionStats& stats, S slack = S(0)) {
+/// Which vertices (or faces) a pass visits: all of them, or a list from the broad phase. Both are inlined, so
+/// the full pass pays nothing for the choice.
+struct AllItems {
+  Index operator[](Index k) const { return k; }
+};
+struct ItemList {
+  const Index* items;
+  Index operator[](Index k) const { return items[k]; }
+};
+
+/// Adds a thread's largest distance of a moved vertex from where the broad phase binned it to `bound`, once per
+/// thread after a work-shared loop: the sum over threads is at least the largest of all (an atomic add, cheaper
+/// than a critical section; only the broad phase reads it and the contacts do not depend on it, so its
+/// rounding order does not matter). Without a broad phase the binned positions are the positions themselves.
+template <Scalar S> void addMoveBound(S& bound, S mine) {
+  DRAPE_OMP(atomic)
+  bound += mine;
+}
+
+/// Moves every free vertex of `ids` (count of them) closer than `thickness` (by more than `slack`) out along
+/// the normal and records the contact; `moveBound` grows by at least the largest distance of a moved vertex
+/// from `binned` (addMoveBound). A work-shared loop; the counts are added once per thread.
+template <class Shape, Scalar S, class Ids>
+void projectVertexContacts(const CompiledSolid<Shape, S>& solid, S thickness, Vec3<S>* x, const S* invMass, Ids ids,
+                           Index count, ContactBuffer<S>& contacts, CollisionStats& stats, const Vec3<S>* binned,
+                           S& moveBound, S slack = S(0)) {
   std::int64_t found = 0;
+  S moved = 0;
   DRAPE_OMP(for schedule(static) nowait)
-  for (Index i = 0; i < vertexCount; ++i) {
+  for (Index k = 0; k < count; ++k) {
+    const Index i = ids[k];
     if (invMass[i] == S(0)) continue;
     Vec3<S> n;
     const S phi = solid.sdf(x[i], n);
@@ -154,24 +177,29 @@ void projectVertexContacts(const CompiledSolid<Shape, S>& solid, S thickness, Ve
     const S dn = thickness - phi;
     x[i] += dn * n;
     contacts.record(i, x[i], n, solid.motion.velocityAt(x[i]), dn, solid.motion);
+    moved = std::max(moved, (x[i] - binned[i]).squaredNorm());
     ++found;
   }
   DRAPE_OMP(atomic)
   stats.vertexContacts += found;
   DRAPE_OMP(atomic)
-  stats.sdfEvaluations += vertexCount;
+  stats.sdfEvaluations += count;
+  addMoveBound(moveBound, std::sqrt(moved));
   DRAPE_OMP(barrier)
 }
 
 /// For every face: cull by bounding sphere (when kCull), find the deepest point by PGD, and if it is closer
 /// than `thickness`, move the face's vertices, weighted by barycentric weight and inverse mass
-/// (dx_i = w_i b_i / sum_j w_j b_j^2 * depth * n), so that point reaches the thickness. Serial: neighbouring
+/// (dx_i = w_i b_i / sum_j w_j b_j^2 * depth * n), so that point reaches the thickness. Visits the faces `ids`
+/// (count of them) in order. Returns the largest distance of a moved vertex from `binned`. Serial: neighbouring
 /// faces share vertices.
-template <bool kCull, class Shape, Scalar S>
-void projectFaceContacts(const CompiledSolid<Shape, S>& solid, S thickness, int pgdIterations,
-                         const std::vector<std::array<Index, 3>>& triangles, Vec3<S>* x, const S* invMass,
-                         ContactBuffer<S>& contacts, CollisionStats& stats) {
-  for (const auto& t : triangles) {
+template <bool kCull, class Shape, Scalar S, class Ids>
+S projectFaceContacts(const CompiledSolid<Shape, S>& solid, S thickness, int pgdIterations,
+                      const std::vector<std::array<Index, 3>>& triangles, Ids ids, Index count, Vec3<S>* x,
+                      const S* invMass, ContactBuffer<S>& contacts, CollisionStats& stats, const Vec3<S>* binned) {
+  S moved = 0;
+  for (Index f = 0; f < count; ++f) {
+    const auto& t = triangles[std::size_t(ids[f])];
     FaceQuery<S> q;
     if (!queryFace<kCull>(solid.sdf, x[t[0]], x[t[1]], x[t[2]], thickness, pgdIterations, q)) {
       ++stats.facesCulled;
@@ -191,9 +219,11 @@ void projectFaceContacts(const CompiledSolid<Shape, S>& solid, S thickness, int 
       const S dn = wb[k] / denom * depth;
       x[t[k]] += dn * q.normal;
       contacts.record(t[k], x[t[k]], q.normal, solid.motion.velocityAt(x[t[k]]), dn, solid.motion);
+      moved = std::max(moved, (x[t[k]] - binned[t[k]]).squaredNorm());
     }
   }
-  stats.facesTested += Index(triangles.size());
+  stats.facesTested += count;
+  return std::sqrt(moved);
 }
 
 inline constexpr int kLeastSquaresSteps = 16;  ///< Jacobi steps for a point pinched between surfaces
@@ -256,11 +286,14 @@ Vec3<S> nearestInHalfSpaces(const Vec3<S>* n, const S* b, int count, const Vec3<
 /// contact half-spaces at once (nearestInHalfSpaces). A pinched vertex starts its least-squares placement
 /// from `reference` (where it was before this substep's contacts moved it): the projections it went through
 /// on the way, some of them sideways off an edge, are forgotten rather than repeated every substep, which
-/// would feed the constraint solve a sideways jump each substep.
+/// would feed the constraint solve a sideways jump each substep. `moveBound` grows by at least the largest
+/// distance of a moved vertex from `binned` (addMoveBound).
 template <Scalar S>
-void projectOntoContactPlanes(const ContactBuffer<S>& contacts, Vec3<S>* x, const Vec3<S>* reference) {
+void projectOntoContactPlanes(const ContactBuffer<S>& contacts, Vec3<S>* x, const Vec3<S>* reference,
+                              const Vec3<S>* binned, S& moveBound) {
   const Index n = contacts.size();
-  DRAPE_OMP(for schedule(static))
+  S moved = 0;
+  DRAPE_OMP(for schedule(static) nowait)
   for (Index i = 0; i < n; ++i) {
     if (!contacts.live(i)) continue;
     const int count = contacts.slotCount[i];
@@ -270,7 +303,10 @@ void projectOntoContactPlanes(const ContactBuffer<S>& contacts, Vec3<S>* x, cons
     S offsets[ContactBuffer<S>::kSlots];
     for (int k = 0; k < count; ++k) normals[k] = sl[k].normal, offsets[k] = sl[k].offset;
     x[i] = nearestInHalfSpaces(normals, offsets, count, x[i], reference[i]);
+    moved = std::max(moved, (x[i] - binned[i]).squaredNorm());
   }
+  addMoveBound(moveBound, std::sqrt(moved));
+  DRAPE_OMP(barrier)
 }
 
 /// Coulomb friction on positions for one contact surface: the tangential displacement of this substep

@@ -7,6 +7,7 @@
 #include <drape/sdf/shapes.hpp>
 
 #include <cstdint>
+#include <limits>
 
 namespace drape {
 
@@ -68,6 +69,10 @@ template <class Shape, Scalar S> struct CompiledSolid {
   SolidMotion<S> motion;
   S repulsionRadius = 0;  ///< m beyond the thickness; 0: none
   Falloff falloff = Falloff::Linear;
+  /// An axis-aligned box in the cloth's local frame outside which phi is at least the distance to the box
+  /// (the broad phase's test); false for an unbounded solid (a plane), which every vertex and face meets.
+  bool bounded = false;
+  Vec3<S> boxLow = Vec3<S>::Zero(), boxHigh = Vec3<S>::Zero();
 };
 
 namespace detail {
@@ -95,13 +100,64 @@ template <class Shape> void validateSolid(const Solid<Shape>& s, const std::stri
   validateShape(s.shape);
 }
 
+/// The shape's bounding box in its own frame, as centre and half extents; false for an unbounded shape. For a
+/// grid distance field it is the grid's box: beyond it the field is at least the distance to the box.
+inline bool shapeBox(const Plane&, Eigen::Vector3d&, Eigen::Vector3d&) { return false; }
+inline bool shapeBox(const Sphere& s, Eigen::Vector3d& c, Eigen::Vector3d& e) {
+  c.setZero();
+  e.setConstant(s.radius);
+  return true;
+}
+inline bool shapeBox(const Box& b, Eigen::Vector3d& c, Eigen::Vector3d& e) {
+  c.setZero();
+  e = b.halfExtents;
+  return true;
+}
+inline bool shapeBox(const Capsule& s, Eigen::Vector3d& c, Eigen::Vector3d& e) {
+  c.setZero();
+  e = {s.radius, s.radius, s.halfHeight + s.radius};
+  return true;
+}
+inline bool shapeBox(const Cylinder& s, Eigen::Vector3d& c, Eigen::Vector3d& e) {
+  c.setZero();
+  e = {s.radius, s.radius, s.halfHeight};
+  return true;
+}
+inline bool shapeBox(const ConvexHull& h, Eigen::Vector3d& c, Eigen::Vector3d& e) {
+  c.setZero();
+  e.setConstant(h.boundingRadius());
+  return true;
+}
+inline bool shapeBox(const MeshShape& m, Eigen::Vector3d& c, Eigen::Vector3d& e) {
+  c = 0.5 * (m.grid->lower + m.grid->upper());
+  e = 0.5 * (m.grid->upper() - m.grid->lower);
+  return true;
+}
+
+/// Places the solid's bounding box in the cloth's local frame, grown by a margin that covers rounding to S (a
+/// field evaluated in float is off by some ulps of the coordinates).
+template <class Shape, Scalar S> void placeBounds(CompiledSolid<Shape, S>& out, const Solid<Shape>& s,
+                                                  const Eigen::Vector3d& origin) {
+  Eigen::Vector3d c, e;
+  out.bounded = shapeBox(s.shape, c, e);
+  if (!out.bounded) return;
+  const Eigen::Matrix3d r = s.pose.rotation.toRotationMatrix();
+  const Eigen::Vector3d mid = s.pose.position - origin + r * c;
+  const Eigen::Vector3d half = r.cwiseAbs() * e;
+  const double pad = 1e-6 + 64 * double(std::numeric_limits<S>::epsilon()) * (mid.cwiseAbs() + half).maxCoeff();
+  out.boxLow = (mid - half).array().cast<S>() - S(pad);
+  out.boxHigh = (mid + half).array().cast<S>() + S(pad);
+}
+
 template <class Shape, Scalar S>
 CompiledSolid<Shape, S> compileSolid(const Solid<Shape>& s, const Eigen::Vector3d& origin) {
-  return {compileSdf<S>(s.shape, s.pose, origin),
+  CompiledSolid<Shape, S> out{compileSdf<S>(s.shape, s.pose, origin),
           {(s.pose.position - origin).template cast<S>(), s.linearVelocity.template cast<S>(), s.angularVelocity.template cast<S>(),
            S(s.staticFriction), S(s.dynamicFriction)},
           S(s.repulsion.radius),
           s.repulsion.falloff};
+  placeBounds(out, s, origin);
+  return out;
 }
 
 /// Recompiles `sdf` for a new pose. Every field is rebuilt, except that a hull keeps the query data it was
@@ -121,6 +177,7 @@ void recompileSolid(CompiledSolid<Shape, S>& out, const Solid<Shape>& s, const E
                 s.angularVelocity.template cast<S>(), S(s.staticFriction), S(s.dynamicFriction)};
   out.repulsionRadius = S(s.repulsion.radius);
   out.falloff = s.repulsion.falloff;
+  placeBounds(out, s, origin);
 }
 
 /// Advances a kinematic solid's pose by its velocities over h seconds (exact for constant velocities). A
