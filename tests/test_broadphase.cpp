@@ -23,7 +23,7 @@ template <class S> bool inGrownBox(const drape::Vec3<S>& p, const drape::Vec3<S>
 
 /// A 40 x 40 cloth falling onto a floor and five bounded solids of every convex kind, one of them a box
 /// sweeping sideways through the cloth at 3 m/s (it drags vertices far from where they were binned).
-template <class S> drape::Solver<S> crowdedScene(drape::BroadPhase broadPhase, int threads) {
+template <class S> drape::Solver<S> crowdedScene(bool broadPhase, int threads) {
   drape::GridDesc grid;
   grid.nx = grid.ny = 40;
   grid.spacing = 0.02;
@@ -144,14 +144,14 @@ TEMPLATE_TEST_CASE("the cloth grid finds exactly the vertices in a box, and ever
 TEMPLATE_TEST_CASE("with the broad phase a crowded scene runs bit for bit as without it, on one and two threads",
                    "[broadphase]", float, double) {
   using S = TestType;
-  auto plain = crowdedScene<S>(drape::BroadPhase::Never, 1);
-  auto gridded = crowdedScene<S>(drape::BroadPhase::Always, 1);
-  auto automatic = crowdedScene<S>(drape::BroadPhase::Auto, 2);  // six solids, five bounded: the grid is on
+  auto plain = crowdedScene<S>(false, 1);
+  auto gridded = crowdedScene<S>(true, 1);
+  auto twoThreads = crowdedScene<S>(true, 2);
   std::int64_t plainEvaluations = 0, griddedEvaluations = 0, contacts = 0;
   for (int s = 0; s < 40; ++s) {
     plain.step(1.0 / 60);
     gridded.step(1.0 / 60);
-    automatic.step(1.0 / 60);
+    twoThreads.step(1.0 / 60);
     plainEvaluations += plain.stats().sdfEvaluations;
     griddedEvaluations += gridded.stats().sdfEvaluations;
     contacts += gridded.stats().vertexContacts + gridded.stats().faceContacts;
@@ -159,7 +159,7 @@ TEMPLATE_TEST_CASE("with the broad phase a crowded scene runs bit for bit as wit
     REQUIRE(gridded.stats().faceContacts == plain.stats().faceContacts);
   }
   requireSameState(plain, gridded);
-  requireSameState(plain, automatic);
+  requireSameState(plain, twoThreads);
   // The scene did touch the solids, and the sweeper went through the cloth.
   CHECK(contacts > 1000);
   const double share = double(griddedEvaluations) / double(plainEvaluations);
@@ -177,9 +177,9 @@ TEST_CASE("the rigid-body rain gives the same bodies and cloth with and without 
   c.minDrop = 0.6;
   c.maxDrop = 0.8;
   c.release = 0.3;
-  c.base.broadPhase = drape::BroadPhase::Never;
+  c.base.broadPhase = false;
   drape::scenes::RigidRain<S> plain(c);
-  c.base.broadPhase = drape::BroadPhase::Always;
+  c.base.broadPhase = true;
   drape::scenes::RigidRain<S> gridded(c);
   for (int s = 0; s < 45; ++s) {
     plain.step();

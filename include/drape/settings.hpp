@@ -55,24 +55,6 @@ inline const char* toString(ContactForce f) {
   return "?";
 }
 
-/// Whether the contacts with bounded solids (every shape but the plane) go through a uniform grid of the cloth's
-/// vertices, rebuilt every substep, so that each such solid costs in proportion to the cloth near it rather than
-/// to the whole cloth (many rigid bodies at linear cost). The contacts are the same either way, bit for bit.
-enum class BroadPhase {
-  Auto,    ///< from two bounded solids on (for one, building the grid costs about what it saves)
-  Always,  ///< whenever there is a bounded solid
-  Never,   ///< every solid visits every vertex and face
-};
-
-inline const char* toString(BroadPhase b) {
-  switch (b) {
-    case BroadPhase::Auto: return "auto";
-    case BroadPhase::Always: return "always";
-    case BroadPhase::Never: return "never";
-  }
-  return "?";
-}
-
 struct Settings {
   int subStepCount = 10;   ///< substeps per step(dt); h = dt / subStepCount
   int iterationCount = 1;  ///< constraint-solve passes per substep
@@ -91,7 +73,11 @@ struct Settings {
   int pgdIterations = 12;      ///< most SDF evaluations per face in the deepest-point search (>= 1); it
                                ///< stops earlier once certified, so this only caps curved faces
   bool culling = true;         ///< bounding-sphere culling of faces (exact: it never drops a contact)
-  BroadPhase broadPhase = BroadPhase::Auto;  ///< grid of the cloth for contacts with bounded solids
+  /// Contacts with bounded solids (every shape but the plane) go through a uniform grid of the cloth's vertices,
+  /// rebuilt every substep, so each such solid costs in proportion to the cloth near it rather than to the whole
+  /// cloth (many rigid bodies at linear cost). The contacts are the same either way, bit for bit; off, every
+  /// solid visits every vertex and face (cheaper only for a solid that covers the whole cloth).
+  bool broadPhase = true;
   double propagationWeight = 0.5;  ///< share of a contact's normal velocity correction given to neighbours
   int propagationRings = 1;        ///< how many rings of neighbours receive it (0: none)
 
@@ -124,8 +110,6 @@ struct Settings {
     requireRange(normalDamping, 0, 1, "normalDamping");
     require(pgdIterations >= 1 && pgdIterations <= 1000,
             "pgdIterations must be in [1, 1000] (got " + std::to_string(pgdIterations) + ")");
-    require(broadPhase == BroadPhase::Auto || broadPhase == BroadPhase::Always || broadPhase == BroadPhase::Never,
-            "broadPhase is not one of auto, always, never");
     requireRange(propagationWeight, 0, 1, "propagationWeight");
     require(propagationRings >= 0 && propagationRings <= 8,
             "propagationRings must be in [0, 8] (got " + std::to_string(propagationRings) + ")");

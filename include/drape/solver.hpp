@@ -254,9 +254,7 @@ template <Scalar S, class... Shapes> class BasicSolver {
         solids_);
     for (std::size_t k = 0; k < pins_.size(); ++k)
       pinLocal_[k].target = (pins_[k].target - state_.origin).template cast<S>();
-    gridded_ = settings_.broadPhase == BroadPhase::Always ? bounded > 0
-               : settings_.broadPhase == BroadPhase::Auto ? bounded > 1
-                                                          : false;
+    gridded_ = settings_.broadPhase && bounded > 0;
     coupled_ = !bodies_.empty();
     bodyForce_.assign(bodies_.size(), Eigen::Vector3d::Zero());
     bodyTorque_.assign(bodies_.size(), Eigen::Vector3d::Zero());
