@@ -27,11 +27,15 @@ void BM_RainOnCloth(benchmark::State& state) {
   c.base.threadCount = 1;
   drape::scenes::RigidRain<float> scene(c);
   for (int s = 0; s < 50; ++s) scene.step();
-  std::int64_t vertexContacts = 0, faceContacts = 0, manifolds = 0, steps = 0;
+  std::int64_t vertexContacts = 0, faceContacts = 0, facesTested = 0, facesCulled = 0, evaluations = 0, manifolds = 0,
+               steps = 0;
   for (auto _ : state) {
     scene.step();
     vertexContacts += scene.cloth().stats().vertexContacts;
     faceContacts += scene.cloth().stats().faceContacts;
+    facesTested += scene.cloth().stats().facesTested;
+    facesCulled += scene.cloth().stats().facesCulled;
+    evaluations += scene.cloth().stats().sdfEvaluations;
     manifolds += std::int64_t(scene.world().contacts().size());
     ++steps;
   }
@@ -39,6 +43,10 @@ void BM_RainOnCloth(benchmark::State& state) {
   state.counters["bodies"] = c.bodies;
   state.counters["vertex_contacts"] = double(vertexContacts) / double(steps);  // in the last substep of a step
   state.counters["face_contacts"] = double(faceContacts) / double(steps);
+  // What the broad phase handed the solids (with it, faces and field evaluations near each body only).
+  state.counters["faces_tested"] = double(facesTested) / double(steps);
+  state.counters["faces_culled"] = double(facesCulled) / double(steps);
+  state.counters["sdf_evaluations"] = double(evaluations) / double(steps);
   state.counters["manifolds"] = double(manifolds) / double(steps);  // body-body and body-ground
 }
 BENCHMARK(BM_RainOnCloth)

@@ -69,9 +69,15 @@ template <Scalar S> FaceSphere<S> faceSphere(const Vec3<S>& x0, const Vec3<S>& x
 /// O(cuts) per step, with no LP solver. The cuts are kept (up to kMaxCuts; beyond that, only those active at
 /// the minimum, which keeps it the minimum); evaluating anywhere else, e.g. a damped or Newton step, would
 /// break that invariant and with it the certificate.
+///
+/// The same bound culls: once the certified minimum is clearly above `floor` (the contact margin), no point of
+/// the face is within it and the search stops, returning its best point so far (whose phi is then above the
+/// floor too). The default, infinity, never stops early. Near a solid most faces that pass the bounding-sphere cull are settled so by the centroid's
+/// own tangent plane, without another evaluation.
 template <Scalar S, class Field>
 FaceQuery<S> deepestPointOnFace(const Field& sdf, const Vec3<S>& x0, const Vec3<S>& x1, const Vec3<S>& x2,
-                                const Vec3<S>& centroid, S phiC, const Vec3<S>& gradC, int maxIterations) {
+                                const Vec3<S>& centroid, S phiC, const Vec3<S>& gradC, int maxIterations,
+                                S floor = std::numeric_limits<S>::infinity()) {
   FaceQuery<S> q{Vec3<S>::Constant(S(1) / S(3)), centroid, gradC, phiC, 1};
   constexpr int kMaxCuts = 16;
   constexpr S kGap = S(3e-4);  // stop when within this many longest-edge lengths of the certified minimum
@@ -94,7 +100,10 @@ FaceQuery<S> deepestPointOnFace(const Field& sdf, const Vec3<S>& x0, const Vec3<
   // Clipping a convex polygon adds at most one vertex per cut; the slack covers rounding.
   constexpr int kMaxVertices = 2 * kMaxCuts + 6;
   Vec3<S> poly[kMaxVertices], clipped[kMaxVertices];
-  while (q.evaluations < maxIterations && q.phi - lower > tolerance) {
+  // A face resting on the solid has its minimum at the floor itself (a vertex just placed at the thickness):
+  // the certificate must clear the floor by more than rounding, or such a contact could be lost.
+  const S stop = floor + tolerance;
+  while (q.evaluations < maxIterations && q.phi - lower > tolerance && lower < stop) {
     const Vec3<S> b = next / next.sum();
     const Vec3<S> p = x0 + b[1] * e1 + b[2] * e2;
     Vec3<S> n;
@@ -198,8 +207,9 @@ bool queryFace(const Field& sdf, const Vec3<S>& x0, const Vec3<S>& x1, const Vec
   if constexpr (kCull) {
     if (phiC > sphere.radius + margin) return false;
   }
-  if constexpr (Field::kConvex)
-    q = deepestPointOnFace<S>(sdf, x0, x1, x2, sphere.centre, phiC, gradC, maxIterations);
+  if constexpr (Field::kConvex)  // with culling, the tangent planes cull too
+    q = deepestPointOnFace<S>(sdf, x0, x1, x2, sphere.centre, phiC, gradC, maxIterations,
+                              kCull ? margin : std::numeric_limits<S>::infinity());
   else
     q = descendOnFace<S>(sdf, x0, x1, x2, sphere.centre, phiC, gradC, maxIterations);
   return true;
