@@ -1,5 +1,6 @@
-// Kernel micro-benchmarks, ns per item (items/s inverted): one distance-constraint set per type, the cull of
-// a far face, the deepest-point search per shape, the contact response and propagation.
+// Kernel micro-benchmarks, ns per item (items/s inverted): one distance-constraint set per type and SIMD level,
+// the prediction and the velocity update, the cull of a far face, the deepest-point search per shape, the
+// contact response and propagation.
 // Run: build/bench/bench_kernels --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 #include <drape/drape.hpp>
 
@@ -26,20 +27,53 @@ void perItem(benchmark::State& state, double items) {
 }
 
 /// One pass over the stretch (0), shear (1) or bending (2) set of a 50x80 grid, stretched 1 % (every
-/// constraint does its full arithmetic).
+/// constraint does its full arithmetic), with the kernel of SIMD level 0 (scalar), 1 (SSE2) or 2 (AVX2); double
+/// always runs the scalar kernel.
 template <class S> void distanceSet(benchmark::State& state) {
+  const auto level = drape::SimdLevel(state.range(1));
+  if (level > drape::bestSimdLevel()) {
+    state.SkipWithError("this processor lacks that SIMD level");
+    return;
+  }
   const auto asset = grid<S>(50, 80);
   const drape::DistanceSet<S>& set =
       state.range(0) == 0 ? asset->stretch : state.range(0) == 1 ? asset->shear : asset->bending;
-  std::vector<drape::Vec3<S>> x(asset->restPositions);
-  for (auto& p : x) p *= S(1.01);
+  std::vector<drape::Vec4<S>> x(asset->vertexCount());
+  for (Index i = 0; i < asset->vertexCount(); ++i) {
+    const drape::Vec3<S> p = S(1.01) * asset->restPositions[i];
+    x[i] = drape::Vec4<S>(p.x(), p.y(), p.z(), S(0));
+  }
   const std::vector<S> w(x.size(), S(10));
+  drape::LaneMasses<S> lanes;
+  lanes.gather(set, w.data());
   for (auto _ : state) {
-    drape::solveDistanceSet<false>(set, S(0), static_cast<S*>(nullptr), x.data(), w.data());
-    for (auto& p : x) p *= S(1.0001);  // keep them stretched
+    drape::solveDistanceSet<false>(set, lanes, S(0), static_cast<S*>(nullptr), x.data(), w.data(), level);
+    for (auto& p : x) p.template head<3>() *= S(1.0001);  // keep them stretched
     benchmark::ClobberMemory();
   }
   perItem(state, double(set.size()));
+}
+
+/// The per-vertex passes around the solve on a 50x80 cloth, ns per vertex: the prediction (0) and the
+/// velocity update (1).
+template <class S> void integrate(benchmark::State& state) {
+  const auto asset = grid<S>(50, 80);
+  const Index n = asset->vertexCount();
+  std::vector<drape::Vec3<S>> x(asset->restPositions), xp(n), x0(n), v(n, drape::Vec3<S>(0.1, 0, -0.2));
+  std::vector<drape::Vec4<S>> xw(n);
+  const std::vector<S> w(n, S(10));
+  const drape::Vec3<S> gh(0, 0, S(-9.81 / 300));
+  const S h = S(1.0 / 300);
+  drape::predictPositions<false>(n, x.data(), v.data(), w.data(), gh, h, x0.data(), xp.data(), xw.data());
+  const bool predict = state.range(0) == 0;
+  for (auto _ : state) {
+    if (predict)
+      drape::predictPositions<false>(n, x.data(), v.data(), w.data(), gh, h, x0.data(), xp.data(), xw.data());
+    else
+      drape::updateVelocities<false>(n, xw.data(), xp.data(), x.data(), v.data(), S(1) / h);
+    benchmark::ClobberMemory();
+  }
+  perItem(state, double(n));
 }
 
 template <class Shape> Shape shapeFor();
@@ -105,8 +139,9 @@ template <class S, bool kFriction> void respondAndPropagate(benchmark::State& st
   perItem(state, propagate ? double(n) : double(live));
 }
 
-BENCHMARK(distanceSet<float>)->ArgName("set")->DenseRange(0, 2);
-BENCHMARK(distanceSet<double>)->ArgName("set")->DenseRange(0, 2);
+BENCHMARK(distanceSet<float>)->ArgNames({"set", "simd"})->ArgsProduct({{0, 1, 2}, {0, 1, 2}});
+BENCHMARK(distanceSet<double>)->ArgNames({"set", "simd"})->ArgsProduct({{0, 1, 2}, {0}});
+BENCHMARK(integrate<float>)->ArgName("update")->DenseRange(0, 1);
 BENCHMARK(faceQuery<drape::Plane, float, false>);
 BENCHMARK(faceQuery<drape::Sphere, float, false>);
 BENCHMARK(faceQuery<drape::Box, float, false>);

@@ -2,6 +2,7 @@
 // drape: cloth that touches solids. Include this header for everything.
 
 #include <drape/cloth/asset.hpp>
+#include <drape/cloth/integrate.hpp>
 #include <drape/cloth/state.hpp>
 #include <drape/collision/pgd.hpp>
 #include <drape/collision/response.hpp>

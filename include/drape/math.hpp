@@ -17,6 +17,7 @@ using Index = std::int32_t;
 
 template <class S> using Vec2 = Eigen::Matrix<S, 2, 1>;
 template <class S> using Vec3 = Eigen::Matrix<S, 3, 1>;
+template <class S> using Vec4 = Eigen::Matrix<S, 4, 1>;
 template <class S> using Mat3 = Eigen::Matrix<S, 3, 3>;
 
 /// Scalars the solver is instantiated for.

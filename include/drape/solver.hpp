@@ -4,6 +4,7 @@
 // Solid types are template parameters: a type the scene does not use is an empty array that no loop visits.
 
 #include <drape/cloth/asset.hpp>
+#include <drape/cloth/integrate.hpp>
 #include <drape/cloth/state.hpp>
 #include <drape/collision/broadphase.hpp>
 #include <drape/collision/pgd.hpp>
@@ -46,9 +47,11 @@ template <Scalar S, class... Shapes> class BasicSolver {
     const Index n = asset_->vertexCount();
     xPrev_.resize(n);
     xPredicted_.resize(n);
-    lambdaStretch_.resize(asset_->stretch.size());
-    lambdaShear_.resize(asset_->shear.size());
-    lambdaBending_.resize(asset_->bending.size());
+    packed_.resize(n);
+    gatherLaneMasses();
+    lambdaStretch_.resize(asset_->stretch.lambdaCount());
+    lambdaShear_.resize(asset_->shear.lambdaCount());
+    lambdaBending_.resize(asset_->bending.lambdaCount());
     contacts_.resize(n);
     propagation_.resize(n);
     // Grid cells of two mean edge lengths: a cell holds a few vertices of a flat cloth.
@@ -111,6 +114,7 @@ template <Scalar S, class... Shapes> class BasicSolver {
                         std::to_string(invMass) + ")");
     state_.invMass[i] = S(invMass);
     if (invMass == 0) state_.v[i].setZero();
+    massesChanged_ = true;  // the lane copies are gathered again before the next substep
   }
   /// Fixes a vertex where it is (inverse mass 0).
   void pin(Index i) { setInverseMass(i, 0); }
@@ -266,6 +270,10 @@ template <Scalar S, class... Shapes> class BasicSolver {
 
   void subStep(double hd) {
     prepareSolids(hd);
+    if (massesChanged_) {
+      gatherLaneMasses();
+      massesChanged_ = false;
+    }
     stats_ = {};
     const int threads = settings_.threadCount == 0 ? hardwareThreads() : settings_.threadCount;
     // One team for the whole substep: the loops inside are work-shared, so the team is made once. One thread
@@ -291,24 +299,15 @@ template <Scalar S, class... Shapes> class BasicSolver {
     if (repulsive_) repel(S(settings_.thickness), h);
     if (coupled_) copyVelocities(vStart_);  // the estimators' velocity at the start of the substep
 
-    // 1. predict (the start positions are kept only for friction, their one reader)
+    // 1. predict, into the packed positions the solve works on (the start positions are kept aside only for
+    //    friction and the energy estimate, their readers after the velocity update)
     const Vec3<S> gh = (settings_.gravity * double(h)).template cast<S>();
     Vec3<S>* xp = xPredicted_.data();
-    auto predict = [&](auto keepStart) {
-      DRAPE_OMP(for schedule(static))
-      for (Index i = 0; i < n; ++i) {
-        if constexpr (decltype(keepStart)::value) x0[i] = x[i];
-        if (w[i] != S(0)) {
-          v[i] += gh;
-          x[i] += h * v[i];
-        }
-        xp[i] = x[i];
-      }
-    };
-    if (hasFriction_ || coupled_)  // the energy estimate reads the start positions too
-      predict(std::true_type{});
+    Vec4<S>* xw = packed_.data();
+    if (hasFriction_ || coupled_)
+      predictPositions<true>(n, x, v, w, gh, h, x0, xp, xw);
     else
-      predict(std::false_type{});
+      predictPositions<false>(n, x, v, w, gh, h, x0, xp, xw);
 
     // 2. solve
     const S h2 = h * h;
@@ -326,35 +325,32 @@ template <Scalar S, class... Shapes> class BasicSolver {
       }
     }
     for (int it = 0; it < iterations; ++it) {
-      solveSet(a.stretch, stretchAlpha, lambdaStretch_.data(), iterations);
-      solveSet(a.shear, shearAlpha, lambdaShear_.data(), iterations);
-      solveSet(a.bending, bendingAlpha, lambdaBending_.data(), iterations);
+      solveSet(a.stretch, laneMasses_[0], stretchAlpha, lambdaStretch_.data(), iterations);
+      solveSet(a.shear, laneMasses_[1], shearAlpha, lambdaShear_.data(), iterations);
+      solveSet(a.bending, laneMasses_[2], bendingAlpha, lambdaBending_.data(), iterations);
       if (!pinLocal_.empty()) {
         DRAPE_OMP(single)
         {
           if (it == 0) std::fill(lambdaPins_.begin(), lambdaPins_.end(), S(0));
-          solvePins(pinLocal_.data(), Index(pinLocal_.size()), pinAlpha, lambdaPins_.data(), x, w);
+          solvePins(pinLocal_.data(), Index(pinLocal_.size()), pinAlpha, lambdaPins_.data(), xw, w);
         }
       }
-      if (baseline) collideBaseline(h, thickness);
+      if (baseline) {  // the previous method collides inside the solve, on the unpacked positions
+        unpack(x, xw);
+        collideBaseline(h, thickness);
+        DRAPE_OMP(for schedule(static))
+        for (Index i = 0; i < n; ++i) xw[i].template head<3>() = x[i];
+      }
     }
 
-    // 3. update velocity: v = (x - x0) / h, computed as v + (x - x_predicted) / h so that the rounding of the
-    //    prediction x0 + h v (in float, an ulp of the position, i.e. ulp / h of speed: 4e-4 m/s at 0.5 m and
-    //    h = 1/1200 s) does not enter the velocity; free flight keeps v exact.
-    //    Where a vertex may touch several surfaces, the positions the contacts start from are kept (in the
-    //    prediction's buffer, free from here on) for the pinched vertices' least-squares placement.
+    // 3. update velocity (updateVelocities). Where a vertex may touch several surfaces, the positions the
+    //    contacts start from are kept (in the prediction's buffer, free from here on) for the pinched vertices'
+    //    least-squares placement.
     const S invH = S(1) / h;
-    if (reconcile_) {
-      DRAPE_OMP(for schedule(static))
-      for (Index i = 0; i < n; ++i) {
-        v[i] += (x[i] - xp[i]) * invH;
-        xp[i] = x[i];
-      }
-    } else {
-      DRAPE_OMP(for schedule(static))
-      for (Index i = 0; i < n; ++i) v[i] += (x[i] - xp[i]) * invH;
-    }
+    if (reconcile_)
+      updateVelocities<true>(n, xw, xp, x, v, invH);
+    else
+      updateVelocities<false>(n, xw, xp, x, v, invH);
 
     // 4. collide
     if (coupled_) copyVelocities(vPre_);  // before any contact acts
@@ -368,6 +364,19 @@ template <Scalar S, class... Shapes> class BasicSolver {
         for (std::size_t b = 0; b < bodies_.size(); ++b) bodies_[b]->applyForceAndTorque(bodyForce_[b], bodyTorque_[b]);
       }
     }
+  }
+
+  /// The constraint blocks' copies of the inverse masses, after any change of a mass.
+  void gatherLaneMasses() {
+    laneMasses_[0].gather(asset_->stretch, state_.invMass.data());
+    laneMasses_[1].gather(asset_->shear, state_.invMass.data());
+    laneMasses_[2].gather(asset_->bending, state_.invMass.data());
+  }
+
+  /// The packed positions back into the state (a work-shared loop).
+  void unpack(Vec3<S>* x, const Vec4<S>* xw) {
+    DRAPE_OMP(for schedule(static))
+    for (Index i = 0; i < vertexCount(); ++i) x[i] = xw[i].template head<3>();
   }
 
   void copyVelocities(std::vector<Vec3<S>>& to) {
@@ -514,11 +523,11 @@ template <Scalar S, class... Shapes> class BasicSolver {
     }
   }
 
-  void solveSet(const DistanceSet<S>& set, S alpha, S* lambda, int iterations) {
+  void solveSet(const DistanceSet<S>& set, const LaneMasses<S>& lanes, S alpha, S* lambda, int iterations) {
     if (iterations > 1 && alpha > S(0))
-      solveDistanceSet<true>(set, alpha, lambda, state_.x.data(), state_.invMass.data());
+      solveDistanceSet<true>(set, lanes, alpha, lambda, packed_.data(), state_.invMass.data());
     else
-      solveDistanceSet<false>(set, alpha, lambda, state_.x.data(), state_.invMass.data());
+      solveDistanceSet<false>(set, lanes, alpha, lambda, packed_.data(), state_.invMass.data());
   }
 
   /// Projects every vertex, then (when kFaces and the field is not linear) every face, out of each solid in
@@ -660,6 +669,8 @@ template <Scalar S, class... Shapes> class BasicSolver {
   std::vector<Pin> pins_;
   std::vector<PinTarget<S>> pinLocal_;
   std::vector<Vec3<S>> xPrev_, xPredicted_;
+  std::vector<Vec4<S>> packed_;   ///< (position, 0) of each vertex: what the constraint solve works on
+  LaneMasses<S> laneMasses_[3];  ///< the stretch, shear and bending blocks' inverse masses (gatherLaneMasses)
   std::vector<S> lambdaStretch_, lambdaShear_, lambdaBending_, lambdaPins_;
   ContactBuffer<S> contacts_;
   PropagationBuffer<S> propagation_;
@@ -669,6 +680,7 @@ template <Scalar S, class... Shapes> class BasicSolver {
   bool reconcile_ = false;    ///< a vertex may touch several surfaces this substep
   bool coupled_ = false;      ///< some solid is a dynamic body this substep
   bool gridded_ = false;      ///< contacts with bounded solids go through the grid this substep
+  bool massesChanged_ = false;  ///< an inverse mass changed since the lane copies were gathered
   ClothGrid<S> grid_;
   std::vector<Index> nearVertices_, nearFaces_;  ///< what the grid found near the current solid
   S moveBound_ = 0;  ///< the passes' largest vertex moves, summed (shared by the team)

@@ -78,12 +78,20 @@ template <Scalar S> struct ContactBuffer {
     return sum;
   }
 
-  /// Records that vertex i was placed at x, dn along n, out of a solid moving with m.
-  void record(Index i, const Vec3<S>& x, const Vec3<S>& n, const Vec3<S>& vc, S dn, const SolidMotion<S>& m) {
+  /// Records that vertex i was placed at x, dn along n, out of a solid moving with m. A vertex's first contact
+  /// of the substep (nearly every one) takes the inlined path; further ones merge in recordMore.
+  DRAPE_ALWAYS_INLINE void record(Index i, const Vec3<S>& x, const Vec3<S>& n, const Vec3<S>& vc, S dn, const SolidMotion<S>& m) {
     if (stamp[i] != current) {
       stamp[i] = current;
-      slotCount[i] = 0;
+      slotCount[i] = 1;
+      slots[i][0] = {n, vc, dn, m.staticFriction, m.dynamicFriction, n.dot(x), m.body};
+      return;
     }
+    recordMore(i, x, n, vc, dn, m);
+  }
+
+ private:
+  void recordMore(Index i, const Vec3<S>& x, const Vec3<S>& n, const Vec3<S>& vc, S dn, const SolidMotion<S>& m) {
     auto& own = slots[i];
     int best = -1;
     S bestCos = kMergeCos;

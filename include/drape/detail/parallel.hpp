@@ -12,6 +12,16 @@
 #define DRAPE_OMP(x)
 #endif
 
+// A small function on a per-vertex path that the compiler would otherwise call (it weighs the rarely taken
+// parts of the caller too).
+#if defined(__GNUC__) || defined(__clang__)
+#define DRAPE_ALWAYS_INLINE inline __attribute__((always_inline))
+#elif defined(_MSC_VER)
+#define DRAPE_ALWAYS_INLINE __forceinline
+#else
+#define DRAPE_ALWAYS_INLINE inline
+#endif
+
 namespace drape {
 
 /// How many threads a solver with threadCount 0 uses: OpenMP's default team size, or 1 without OpenMP.

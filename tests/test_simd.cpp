@@ -1,0 +1,148 @@
+// The SIMD constraint kernels (four lanes in SSE2, eight in AVX2) against the scalar kernel, bit for bit, and
+// the solver's per-lane copies of the inverse masses against changes of a mass.
+#include <drape/drape.hpp>
+
+#include <catch2/catch.hpp>
+
+#include <cstring>
+#include <memory>
+#include <random>
+#include <vector>
+
+namespace {
+
+using drape::Index;
+using drape::SimdLevel;
+
+/// An irregular cloth: a 13 x 11 grid (odd sizes, so colours end in partial blocks and odd block counts) with
+/// its positions jittered by up to 30 % of the spacing, as a mesh (every edge a stretch constraint) or a grid.
+std::shared_ptr<const drape::ClothAsset<float>> jitteredCloth(bool mesh) {
+  drape::GridDesc g;
+  g.nx = 13;
+  g.ny = 11;
+  g.spacing = 0.02;
+  const auto grid = drape::ClothAsset<float>::grid(g);
+  if (!mesh) return std::make_shared<const drape::ClothAsset<float>>(grid);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> u(-0.006f, 0.006f);
+  std::vector<drape::Vec3<float>> x = grid.restPositions;
+  for (auto& p : x) p += drape::Vec3<float>(u(rng), u(rng), u(rng));
+  return std::make_shared<const drape::ClothAsset<float>>(drape::ClothAsset<float>::fromMesh(x, grid.triangles));
+}
+
+/// The positions of the test: the rest shape scaled by 1.05 and jittered, with vertex 0 put on vertex 1 (a
+/// constraint of zero length, which has no direction and must be left alone by every kernel).
+std::vector<drape::Vec4<float>> deformed(const drape::ClothAsset<float>& asset, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(-0.004f, 0.004f);
+  std::vector<drape::Vec4<float>> x(asset.vertexCount());
+  for (Index i = 0; i < asset.vertexCount(); ++i) {
+    const drape::Vec3<float> p = 1.05f * asset.restPositions[i] + drape::Vec3<float>(u(rng), u(rng), u(rng));
+    x[i] = drape::Vec4<float>(p.x(), p.y(), p.z(), 0.0f);
+  }
+  x[0] = x[1];
+  return x;
+}
+
+/// Inverse masses in [0.5, 20] with every seventh vertex pinned (0), so some constraints have one fixed end
+/// and some (with compliance 0) two.
+std::vector<float> masses(Index n) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(0.5f, 20.0f);
+  std::vector<float> w(n);
+  for (Index i = 0; i < n; ++i) w[i] = i % 7 == 3 ? 0.0f : u(rng);
+  return w;
+}
+
+bool sameBits(const std::vector<drape::Vec4<float>>& a, const std::vector<drape::Vec4<float>>& b) {
+  return std::memcmp(a.data(), b.data(), a.size() * sizeof(a[0])) == 0;
+}
+
+/// The scalar kernel keeps a multiplier per constraint, the SIMD kernels per lane: lane of constraint k.
+Index laneOf(const drape::DistanceSet<float>& set, Index k) {
+  Index c = 0;
+  while (set.colourOffsets[c + 1] <= k) ++c;
+  return set.blockOffsets[c] * drape::DistanceBlock<float>::kLanes + (k - set.colourOffsets[c]);
+}
+
+}  // namespace
+
+TEST_CASE("the SIMD constraint kernels give the scalar kernel's bits", "[simd]") {
+  const SimdLevel best = drape::bestSimdLevel();
+  if (best < SimdLevel::Avx2) WARN("this processor lacks AVX2: the eight-lane kernel is not compared");
+  if (best < SimdLevel::Sse2) WARN("this build has no SSE2: only the scalar kernel runs");
+  for (const bool mesh : {false, true}) {
+    const auto asset = jitteredCloth(mesh);
+    const std::vector<float> w = masses(asset->vertexCount());
+    for (const auto* set : {&asset->stretch, &asset->shear, &asset->bending}) {
+      if (set->size() == 0) continue;
+      drape::LaneMasses<float> lanes;
+      lanes.gather(*set, w.data());
+      for (const float alpha : {0.0f, 0.37f}) {
+        for (const bool multipliers : {false, true}) {
+          INFO("mesh " << mesh << ", set of " << set->size() << " constraints, alpha~ " << alpha
+                       << ", multipliers " << multipliers);
+          // Three passes from the same start, as three iterations of a substep.
+          auto run = [&](SimdLevel level, std::vector<float>& lambda) {
+            std::vector<drape::Vec4<float>> x = deformed(*asset, 5);
+            lambda.assign(set->lambdaCount(), 0.0f);
+            for (int pass = 0; pass < 3; ++pass) {
+              if (multipliers)
+                drape::solveDistanceSet<true>(*set, lanes, alpha, lambda.data(), x.data(), w.data(), level);
+              else
+                drape::solveDistanceSet<false>(*set, lanes, alpha, static_cast<float*>(nullptr), x.data(), w.data(), level);
+            }
+            return x;
+          };
+          std::vector<float> lambdaScalar, lambdaSse, lambdaAvx;
+          const auto scalar = run(SimdLevel::Scalar, lambdaScalar);
+          // The kernels did something: the deformed start is not a solution.
+          CHECK(!sameBits(scalar, deformed(*asset, 5)));
+          // The zero-length constraint moved neither end along a direction it does not have: both ends moved
+          // only through their other constraints, so they are finite.
+          CHECK(scalar[0].allFinite());
+          for (const SimdLevel level : {SimdLevel::Sse2, SimdLevel::Avx2}) {
+            if (level > best) continue;
+            std::vector<float>& lambda = level == SimdLevel::Sse2 ? lambdaSse : lambdaAvx;
+            const auto simd = run(level, lambda);
+            INFO("SIMD level " << int(level));
+            CHECK(sameBits(simd, scalar));
+            if (multipliers) {
+              int differing = 0;
+              for (Index k = 0; k < set->size(); ++k)
+                if (std::memcmp(&lambdaScalar[k], &lambda[laneOf(*set, k)], sizeof(float)) != 0) ++differing;
+              CHECK(differing == 0);
+            }
+          }
+        }
+      }
+    }
+  }
+}
+
+TEMPLATE_TEST_CASE("a vertex pinned or freed between steps is solved with its new mass", "[simd][input]", float,
+                   double) {
+  drape::GridDesc g;
+  g.nx = 9;
+  g.ny = 9;
+  g.spacing = 0.05;
+  auto asset = std::make_shared<const drape::ClothAsset<TestType>>(drape::ClothAsset<TestType>::grid(g));
+  drape::Settings settings;
+  settings.subStepCount = 4;
+  drape::Solver<TestType> solver(asset, settings);
+  solver.pin(0);
+  solver.pin(8);
+  for (int f = 0; f < 20; ++f) solver.step(1.0 / 60.0);
+  // Pinned while the cloth swings: the constraints must no longer move it (a stale copy of its old mass would).
+  const drape::Index middle = 4 * 9 + 4;
+  solver.pin(middle);
+  const Eigen::Vector3d held = solver.position(middle);
+  for (int f = 0; f < 20; ++f) {
+    solver.step(1.0 / 60.0);
+    REQUIRE(solver.position(middle) == held);
+  }
+  // Freed again, it falls with the cloth around it.
+  solver.setInverseMass(middle, 1.0);
+  for (int f = 0; f < 20; ++f) solver.step(1.0 / 60.0);
+  CHECK(solver.position(middle).z() < held.z() - 0.01);
+}
