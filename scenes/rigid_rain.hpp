@@ -48,12 +48,8 @@ inline RainShape rainShapeFromString(const std::string& name) {
     if (name == toString(s)) return s;
   throw Error("unknown rain shape '" + name + "' (sphere, box, capsule, cylinder, hull)");
 }
-/// The ContactForce named by toString(ContactForce), or throws drape::Error.
-inline ContactForce contactForceFromString(const std::string& name) {
-  for (ContactForce f : {ContactForce::SubForce, ContactForce::Energy, ContactForce::Impulse})
-    if (name == toString(f)) return f;
-  throw Error("unknown contact force estimator '" + name + "' (sub-force, energy, impulse)");
-}
+/// The ContactForce named by toString(ContactForce), or throws drape::Error (settings.hpp).
+using drape::contactForceFromString;
 
 /// The RainShape bits whose bodies `ClothSolver` can take as solids (addCoupledBody needs the shape type).
 template <class ClothSolver> constexpr unsigned supportedRainShapes() {

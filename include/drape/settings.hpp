@@ -55,6 +55,13 @@ inline const char* toString(ContactForce f) {
   return "?";
 }
 
+/// The estimator named "sub-force", "energy" or "impulse" (toString's names); throws drape::Error for another.
+inline ContactForce contactForceFromString(const std::string& name) {
+  for (ContactForce f : {ContactForce::SubForce, ContactForce::Energy, ContactForce::Impulse})
+    if (name == toString(f)) return f;
+  throw Error("drape: unknown contact force estimator '" + name + "' (sub-force, energy, impulse)");
+}
+
 struct Settings {
   int subStepCount = 10;   ///< substeps per step(dt); h = dt / subStepCount
   int iterationCount = 1;  ///< constraint-solve passes per substep
