@@ -70,7 +70,7 @@ template <class S> void integrate(benchmark::State& state) {
     if (predict)
       drape::predictPositions<false>(n, x.data(), v.data(), w.data(), gh, h, x0.data(), xp.data(), xw.data());
     else
-      drape::updateVelocities<false>(n, xw.data(), xp.data(), x.data(), v.data(), S(1) / h);
+      drape::updateVelocities<false, false>(n, xw.data(), xp.data(), x.data(), v.data(), S(1) / h);
     benchmark::ClobberMemory();
   }
   perItem(state, double(n));

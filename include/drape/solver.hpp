@@ -92,6 +92,7 @@ template <Scalar S, class... Shapes> class BasicSolver {
       detail::require((world[i] - origin).cwiseAbs().maxCoeff() <= kMaxDistance,
                       "position of vertex " + std::to_string(i) + " lies more than 1e5 m from the cloth's centre");
     state_.origin = origin;
+    gridFresh_ = false;  // the grid's binned positions are not these
     for (std::size_t i = 0; i < world.size(); ++i) state_.x[i] = (world[i] - origin).template cast<S>();
   }
   /// Replaces all velocities (m/s), with the same checks.
@@ -220,6 +221,7 @@ template <Scalar S, class... Shapes> class BasicSolver {
     const Vec3<S> shiftS = shift.cast<S>();
     for (auto& p : state_.x) p -= shiftS;
     state_.origin += shift;
+    gridFresh_ = false;
   }
 
   template <class F> void forEachCompiled(F&& f) {
@@ -259,6 +261,8 @@ template <Scalar S, class... Shapes> class BasicSolver {
     for (std::size_t k = 0; k < pins_.size(); ++k)
       pinLocal_[k].target = (pins_[k].target - state_.origin).template cast<S>();
     gridded_ = settings_.broadPhase && bounded > 0;
+    gridFresh_ = gridFresh_ && gridded_;  // a grid not kept up in a substep without it is built anew
+    moveBound_ = 0;
     coupled_ = !bodies_.empty();
     bodyForce_.assign(bodies_.size(), Eigen::Vector3d::Zero());
     bodyTorque_.assign(bodies_.size(), Eigen::Vector3d::Zero());
@@ -346,11 +350,19 @@ template <Scalar S, class... Shapes> class BasicSolver {
     // 3. update velocity (updateVelocities). Where a vertex may touch several surfaces, the positions the
     //    contacts start from are kept (in the prediction's buffer, free from here on) for the pinched vertices'
     //    least-squares placement.
+    //    With the broad phase, the update also measures how far the vertices got from where the grid binned them,
+    //    so the grid is rebuilt only when queries would have to grow too much.
     const S invH = S(1) / h;
-    if (reconcile_)
-      updateVelocities<true>(n, xw, xp, x, v, invH);
-    else
-      updateVelocities<false>(n, xw, xp, x, v, invH);
+    if (gridded_ && gridFresh_) {
+      const S far = reconcile_ ? updateVelocities<true, true>(n, xw, xp, x, v, invH, grid_.binned())
+                               : updateVelocities<false, true>(n, xw, xp, x, v, invH, grid_.binned());
+      addMoveBound(moveBound_, std::sqrt(far));
+      DRAPE_OMP(barrier)
+    } else if (reconcile_) {
+      updateVelocities<true, false>(n, xw, xp, x, v, invH);
+    } else {
+      updateVelocities<false, false>(n, xw, xp, x, v, invH);
+    }
 
     // 4. collide
     if (coupled_) copyVelocities(vPre_);  // before any contact acts
@@ -593,8 +605,14 @@ template <Scalar S, class... Shapes> class BasicSolver {
     DRAPE_OMP(single)
     {
       contacts_.begin();
+      if (gridded_) {
+        grid_.noteDrift(moveBound_);  // the prediction's and the solve's moves (updateVelocities)
+        // The baseline collides inside the solve, before the update has measured the solve's moves.
+        const bool inSolve = settings_.collisionMethod == CollisionMethod::Baseline;
+        if (!gridFresh_ || inSolve || grid_.stale()) grid_.build(state_.x.data(), asset_->triangles);
+        gridFresh_ = true;
+      }
       moveBound_ = 0;
-      if (gridded_) grid_.build(state_.x.data(), asset_->triangles);
     }
     if (faces && settings_.culling)
       projectContacts<true, true>(thickness);
@@ -680,6 +698,7 @@ template <Scalar S, class... Shapes> class BasicSolver {
   bool reconcile_ = false;    ///< a vertex may touch several surfaces this substep
   bool coupled_ = false;      ///< some solid is a dynamic body this substep
   bool gridded_ = false;      ///< contacts with bounded solids go through the grid this substep
+  bool gridFresh_ = false;    ///< the grid was built, and every move since is in its drift
   bool massesChanged_ = false;  ///< an inverse mass changed since the lane copies were gathered
   ClothGrid<S> grid_;
   std::vector<Index> nearVertices_, nearFaces_;  ///< what the grid found near the current solid

@@ -5,6 +5,8 @@
 #include <drape/detail/parallel.hpp>
 #include <drape/math.hpp>
 
+#include <algorithm>
+
 namespace drape {
 
 /// Step 1 for vertices [0, n): a free vertex (inverse mass w != 0) gains gh = h g of velocity and moves h v;
@@ -30,17 +32,22 @@ void predictPositions(Index n, const Vec3<S>* x, Vec3<S>* v, const S* w, const V
 /// Step 3: v = (x - x_start) / h, computed as v + (x - x_predicted) / h so that the rounding of the prediction
 /// x_start + h v (in float, an ulp of the position, i.e. ulp / h of speed: 4e-4 m/s at 0.5 m and h = 1/1200 s)
 /// does not enter the velocity; free flight keeps v exact. The solved positions xw go back to x, and with
-/// kKeepSolved also to xp (where the pinched vertices' least-squares placement starts from). A work-shared
-/// loop.
-template <bool kKeepSolved, Scalar S>
-void updateVelocities(Index n, const Vec4<S>* xw, Vec3<S>* xp, Vec3<S>* x, Vec3<S>* v, S invH) {
+/// kKeepSolved also to xp (where the pinched vertices' least-squares placement starts from). With kDrift, returns
+/// the largest squared distance of this thread's vertices from `reference` (the broad phase's binned positions),
+/// else 0. A work-shared loop.
+template <bool kKeepSolved, bool kDrift, Scalar S>
+S updateVelocities(Index n, const Vec4<S>* xw, Vec3<S>* xp, Vec3<S>* x, Vec3<S>* v, S invH,
+                   const Vec3<S>* reference = nullptr) {
+  S far = 0;
   DRAPE_OMP(for schedule(static))
   for (Index i = 0; i < n; ++i) {
     const Vec3<S> p = xw[i].template head<3>();
     v[i] += (p - xp[i]) * invH;
     x[i] = p;
     if constexpr (kKeepSolved) xp[i] = p;
+    if constexpr (kDrift) far = std::max(far, (p - reference[i]).squaredNorm());
   }
+  return far;
 }
 
 }  // namespace drape

@@ -18,6 +18,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -38,6 +39,7 @@ template <Scalar S> class ClothGrid {
     std::vector<Index> fill(ownedStart_.begin(), ownedStart_.end() - 1);
     for (Index f = 0; f < Index(triangles.size()); ++f) owned_[std::size_t(fill[triangles[f][0]]++)] = f;
     cellOf_.resize(std::size_t(vertexCount));
+    faceBits_.assign((triangles.size() + 63) / 64, 0);
     items_.resize(std::size_t(vertexCount));
     binned_.resize(std::size_t(vertexCount));
     reach_.resize(std::size_t(vertexCount));
@@ -103,19 +105,31 @@ template <Scalar S> class ClothGrid {
     });
   }
 
-  /// The faces that may have a point in [low, high] grown by margin, in ascending order.
-  void faces(const Vec3<S>* x, const Vec3<S>& low, const Vec3<S>& high, S margin, std::vector<Index>& out) const {
+  /// The faces that may have a point in [low, high] grown by margin, in ascending order. They are marked in a
+  /// bit set as the cells give them, then read out word by word over the span of face indices marked (faces
+  /// near one body are a few rows of the cloth: a few words), which costs less than sorting them.
+  void faces(const Vec3<S>* x, const Vec3<S>& low, const Vec3<S>& high, S margin, std::vector<Index>& out) {
     out.clear();
     // Every point of a face is within its owner's reach + 2 drift of the owner now (each of the face's vertices
     // moved at most drift since the reach was measured).
     const S grow = margin + S(2) * drift_;
     const S most = grow + maxReach_;
+    std::size_t first = faceBits_.size(), last = 0;
     visit(low.array() - most - drift_, high.array() + most + drift_, [&](Index i) {
       const S g = grow + reach_[std::size_t(i)];
       if (!((x[i].array() >= low.array() - g).all() && (x[i].array() <= high.array() + g).all())) return;
-      for (Index k = ownedStart_[std::size_t(i)]; k < ownedStart_[std::size_t(i) + 1]; ++k) out.push_back(owned_[std::size_t(k)]);
+      for (Index k = ownedStart_[std::size_t(i)]; k < ownedStart_[std::size_t(i) + 1]; ++k) {
+        const auto f = std::size_t(owned_[std::size_t(k)]);
+        faceBits_[f / 64] |= std::uint64_t(1) << (f % 64);
+        first = std::min(first, f / 64);
+        last = std::max(last, f / 64);
+      }
     });
-    std::sort(out.begin(), out.end());
+    for (std::size_t w = first; w <= last && w < faceBits_.size(); ++w) {
+      for (std::uint64_t bits = faceBits_[w]; bits != 0; bits &= bits - 1)
+        out.push_back(Index(w * 64 + std::size_t(std::countr_zero(bits))));
+      faceBits_[w] = 0;  // cleared for the next query
+    }
   }
 
  private:
@@ -157,6 +171,7 @@ template <Scalar S> class ClothGrid {
   std::vector<Index> ownedStart_, owned_;  ///< faces owned by each vertex (CSR)
   std::vector<Index> cellStart_, fill_, items_;
   std::vector<std::int32_t> cellOf_;
+  std::vector<std::uint64_t> faceBits_;  ///< scratch of faces(): a bit per face, all clear between queries
 };
 
 }  // namespace drape
