@@ -386,6 +386,35 @@ TEMPLATE_TEST_CASE("convex hull: the exact signed distance, and the direction fr
   CHECK(worstPhi <= kPhiTol<S>);
 }
 
+TEMPLATE_TEST_CASE("convex hull: the culling bound is below phi everywhere, and within sqrt(eps) x size inside",
+                   "[convexsdf]", float, double) {
+  using S = TestType;
+  int inside = 0, outside = 0;
+  for (const auto& hc : hulls()) {
+    INFO(hc.name);
+    const auto sdf = unposed<S>(hc.hull);
+    double size = 0;  // the hull's size as the field measures it: its largest vertex coordinate
+    for (const Vec& a : hc.hull.vertices()) size = std::max(size, a.cwiseAbs().maxCoeff());
+    const S slack = std::sqrt(std::numeric_limits<S>::epsilon()) * S(size);
+    for (const Vec& x : hullPoints(hc.hull, 4000, 11)) {
+      const drape::Vec3<S> p = x.cast<S>();
+      drape::Vec3<S> g;
+      const S phi = sdf(p, g);
+      const S bound = sdf.lowerBound(p);
+      INFO("point " << x.transpose() << ": phi " << phi << ", bound " << bound);
+      CHECK(bound < phi);
+      if (phi <= S(0)) {  // inside, phi is the nearest face's plane: the largest plane distance
+        CHECK(phi - bound <= S(1.01) * slack);
+        ++inside;
+      } else {
+        ++outside;
+      }
+    }
+  }
+  CHECK(inside > 1000);
+  CHECK(outside > 1000);
+}
+
 TEMPLATE_TEST_CASE("the hull of a box's corners is Sdf<Box>, posed or not", "[convexsdf]", float, double) {
   using S = TestType;
   const Vec half(0.4, 0.3, 0.2);

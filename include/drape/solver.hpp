@@ -179,10 +179,10 @@ template <Scalar S, class... Shapes> class BasicSolver {
   /// The same, calling onSubStep(solver) after every substep (for metrics and tests).
   template <class Observer> void step(double dt, Observer&& onSubStep) {
     detail::require(std::isfinite(dt) && dt > 0 && dt <= 10,
-                    "step dt must be in (0, 10] s (got " + std::to_string(dt) + ")");
-    detail::require(dt / settings_.subStepCount >= kMinSubStep,
-                    "step dt / subStepCount must be at least 1e-6 s (got " +
-                        std::to_string(dt / settings_.subStepCount) + ")");
+                    [&] { return "step dt must be in (0, 10] s (got " + std::to_string(dt) + ")"; });
+    detail::require(dt / settings_.subStepCount >= kMinSubStep, [&] {
+      return "step dt / subStepCount must be at least 1e-6 s (got " + std::to_string(dt / settings_.subStepCount) + ")";
+    });
     rebase();
     const double h = dt / settings_.subStepCount;
     for (int sub = 0; sub < settings_.subStepCount; ++sub) {

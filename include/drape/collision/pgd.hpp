@@ -202,6 +202,10 @@ template <bool kCull, Scalar S, class Field>
 bool queryFace(const Field& sdf, const Vec3<S>& x0, const Vec3<S>& x1, const Vec3<S>& x2, S margin,
                int maxIterations, FaceQuery<S>& q) {
   const FaceSphere<S> sphere = faceSphere<S>(x0, x1, x2);
+  if constexpr (kCull && requires { sdf.lowerBound(sphere.centre); }) {
+    // A field with a cheap lower bound culls with it first: where the bound clears the sphere, phi does too.
+    if (sdf.lowerBound(sphere.centre) > sphere.radius + margin) return false;
+  }
   Vec3<S> gradC;
   const S phiC = sdf(sphere.centre, gradC);
   if constexpr (kCull) {

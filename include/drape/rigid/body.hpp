@@ -106,20 +106,31 @@ class RigidBody : public CoupledBody {
   /// Throws drape::Error if the pose, velocities or material are not usable (non-finite, non-unit
   /// quaternion, negative friction, restitution outside [0, 1]).
   void validateState(const std::string& name) const {
+    validateState([&] { return name; });
+  }
+  /// The same, with the body's name made only for a message (the world checks every body every substep).
+  template <class Name>
+    requires std::is_invocable_r_v<std::string, Name>
+  void validateState(Name&& name) const {
     using detail::require;
-    require(detail::allFinite(state.pose.position), name + ": position must be finite");
-    require(detail::allFinite(state.pose.rotation.coeffs()), name + ": rotation must be finite");
-    require(std::abs(state.pose.rotation.norm() - 1) < 1e-6,
-            name + ": rotation must be a unit quaternion (norm " + std::to_string(state.pose.rotation.norm()) + ")");
-    require(detail::allFinite(state.linearVelocity), name + ": linear velocity must be finite");
-    require(detail::allFinite(state.angularVelocity), name + ": angular velocity must be finite");
-    require(motion == BodyMotion::Dynamic || motion == BodyMotion::Kinematic, name + ": motion is not dynamic or kinematic");
+    require(detail::allFinite(state.pose.position), [&] { return name() + ": position must be finite"; });
+    require(detail::allFinite(state.pose.rotation.coeffs()), [&] { return name() + ": rotation must be finite"; });
+    require(std::abs(state.pose.rotation.norm() - 1) < 1e-6, [&] {
+      return name() + ": rotation must be a unit quaternion (norm " + std::to_string(state.pose.rotation.norm()) + ")";
+    });
+    require(detail::allFinite(state.linearVelocity), [&] { return name() + ": linear velocity must be finite"; });
+    require(detail::allFinite(state.angularVelocity), [&] { return name() + ": angular velocity must be finite"; });
+    require(motion == BodyMotion::Dynamic || motion == BodyMotion::Kinematic,
+            [&] { return name() + ": motion is not dynamic or kinematic"; });
     require(std::isfinite(staticFriction) && staticFriction >= 0,
-            name + ": staticFriction must be >= 0 (got " + std::to_string(staticFriction) + ")");
+            [&] { return name() + ": staticFriction must be >= 0 (got " + std::to_string(staticFriction) + ")"; });
     require(std::isfinite(dynamicFriction) && dynamicFriction >= 0,
-            name + ": dynamicFriction must be >= 0 (got " + std::to_string(dynamicFriction) + ")");
-    detail::requireRange(restitution, 0, 1, name + ": restitution");
-    require(detail::allFinite(force_) && detail::allFinite(torque_), name + ": accumulated force must be finite");
+            [&] { return name() + ": dynamicFriction must be >= 0 (got " + std::to_string(dynamicFriction) + ")"; });
+    require(std::isfinite(restitution) && restitution >= 0 && restitution <= 1, [&] {
+      return name() + ": restitution must be in [0.000000, 1.000000] (got " + std::to_string(restitution) + ")";
+    });
+    require(detail::allFinite(force_) && detail::allFinite(torque_),
+            [&] { return name() + ": accumulated force must be finite"; });
   }
 
  private:

@@ -125,7 +125,8 @@ class RigidWorld {
   /// Advances by one substep of h seconds. Forces and torques applied before the call act over it, then are
   /// cleared: a cloth solver applies its contact forces every substep, then calls this.
   void subStep(double h) {
-    detail::require(std::isfinite(h) && h > 0, "subStep: h must be positive and finite (got " + std::to_string(h) + ")");
+    detail::require(std::isfinite(h) && h > 0,
+                    [&] { return "subStep: h must be positive and finite (got " + std::to_string(h) + ")"; });
     validateBodies();
     advance(h);
     for (auto& b : bodies_) b.clearForces();
@@ -172,7 +173,7 @@ class RigidWorld {
   };
 
   void validateBodies() const {
-    for (std::size_t i = 0; i < bodies_.size(); ++i) bodies_[i].validateState("body " + std::to_string(i));
+    for (std::size_t i = 0; i < bodies_.size(); ++i) bodies_[i].validateState([i] { return "body " + std::to_string(i); });
   }
 
   static Eigen::Quaterniond expMap(const Eigen::Vector3d& rotationVector) {

@@ -196,6 +196,17 @@ template <Scalar S> struct Sdf<ConvexHull, S> {
     return outside(bestDelta, std::sqrt(bestSq), faces[front].normal, gradient);
   }
 
+  /// A lower bound on phi at x that costs one dot product per face: the largest signed distance to the faces'
+  /// planes (phi itself inside; outside, the nearest point of the hull is at least that far), less the field's
+  /// rounding scale nearSurface, since phi computed through an edge or a vertex may round a little below the
+  /// plane's distance. The face search culls with it before it evaluates phi.
+  S lowerBound(const Vec3<S>& x) const {
+    const Vec3<S> q = toLocal * (x - centre);
+    S most = -std::numeric_limits<S>::infinity();
+    for (const auto& face : hull->faces) most = std::max(most, face.normal.dot(q) - face.offset);
+    return most - hull->nearSurface;
+  }
+
  private:
   S outside(const Vec3<S>& delta, S distance, const Vec3<S>& frontNormal, Vec3<S>& gradient) const {
     gradient = toLocal.transpose() * (distance > hull->nearSurface ? Vec3<S>(delta / distance) : frontNormal);
