@@ -81,7 +81,7 @@ struct Settings {
                                ///< stops earlier once certified, so this only caps curved faces
   bool culling = true;         ///< bounding-sphere culling of faces (exact: it never drops a contact)
   /// Contacts with bounded solids (every shape but the plane) go through a uniform grid of the cloth's vertices,
-  /// rebuilt every substep, so each such solid costs in proportion to the cloth near it rather than to the whole
+  /// rebuilt once they have moved half a cell from where it binned them, so each such solid costs in proportion to the cloth near it rather than to the whole
   /// cloth (many rigid bodies at linear cost). The contacts are the same either way, bit for bit; off, every
   /// solid visits every vertex and face (cheaper only for a solid that covers the whole cloth).
   bool broadPhase = true;

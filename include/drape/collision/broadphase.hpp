@@ -1,7 +1,7 @@
 #pragma once
 // The cloth side of the broad phase, for scenes with many bounded solids (issue 4: many rigid bodies at linear
-// cost per body). Once per substep, before the contacts, the cloth's vertices are binned into a uniform grid
-// (a counting sort). A bounded solid's vertex pass then visits only the vertices in the cells its box meets,
+// cost per body). The cloth's vertices are binned into a uniform grid (a counting sort), rebuilt when they have
+// moved too far from where they were binned (below). A bounded solid's vertex pass then visits only the vertices in the cells its box meets,
 // grown by the thickness, and its face pass only the faces owned by them (a face is owned by its first
 // vertex, and every point of it lies within the face's reach of that vertex).
 //
@@ -10,9 +10,10 @@
 // thickness plus the reach has no point within the thickness. So the contacts are those of the full passes,
 // bit for bit (the faces are visited in ascending order, as the full pass does).
 //
-// Vertices move while contacts are resolved. Every pass reports how far a vertex it moved has got from where it
-// was binned; the largest such distance since the grid was built (the drift) grows each query by as much, and
-// past half a cell the grid is rebuilt.
+// Vertices move in every substep's prediction and solve and while contacts are resolved. The velocity update and
+// every contact pass report how far the vertices they moved have got from where they were binned; the largest
+// such distance since the grid was built (the drift) grows each query by as much, and past half a cell the grid
+// is rebuilt.
 
 #include <drape/math.hpp>
 
