@@ -58,6 +58,22 @@ bool sameBits(const std::vector<drape::Vec4<float>>& a, const std::vector<drape:
   return std::memcmp(a.data(), b.data(), a.size() * sizeof(a[0])) == 0;
 }
 
+#if defined(__FMA__)
+// Built for a processor with FMA (e.g. -march=native): the compiler may fuse a * b + c in the scalar and SSE
+// kernels, never in the AVX2 one, so the kernels agree to rounding rather than bit for bit.
+constexpr bool kFusedBuild = true;
+#else
+constexpr bool kFusedBuild = false;
+#endif
+
+/// The kernels' positions agree: bit for bit, or in a fused build within 1e-6 m (a few float ulps at 0.2 m).
+bool agree(const std::vector<drape::Vec4<float>>& a, const std::vector<drape::Vec4<float>>& b) {
+  if (!kFusedBuild) return sameBits(a, b);
+  for (std::size_t i = 0; i < a.size(); ++i)
+    if ((a[i] - b[i]).cwiseAbs().maxCoeff() > 1e-6f) return false;
+  return true;
+}
+
 /// The scalar kernel keeps a multiplier per constraint, the SIMD kernels per lane: lane of constraint k.
 Index laneOf(const drape::DistanceSet<float>& set, Index k) {
   Index c = 0;
@@ -71,6 +87,7 @@ TEST_CASE("the SIMD constraint kernels give the scalar kernel's bits", "[simd]")
   const SimdLevel best = drape::bestSimdLevel();
   if (best < SimdLevel::Avx2) WARN("this processor lacks AVX2: the eight-lane kernel is not compared");
   if (best < SimdLevel::Sse2) WARN("this build has no SSE2: only the scalar kernel runs");
+  if (kFusedBuild) WARN("a build with FMA: the kernels are compared to rounding, not bit for bit");
   for (const bool mesh : {false, true}) {
     const auto asset = jitteredCloth(mesh);
     const std::vector<float> w = masses(asset->vertexCount());
@@ -106,8 +123,8 @@ TEST_CASE("the SIMD constraint kernels give the scalar kernel's bits", "[simd]")
             std::vector<float>& lambda = level == SimdLevel::Sse2 ? lambdaSse : lambdaAvx;
             const auto simd = run(level, lambda);
             INFO("SIMD level " << int(level));
-            CHECK(sameBits(simd, scalar));
-            if (multipliers) {
+            CHECK(agree(simd, scalar));
+            if (multipliers && !kFusedBuild) {
               int differing = 0;
               for (Index k = 0; k < set->size(); ++k)
                 if (std::memcmp(&lambdaScalar[k], &lambda[laneOf(*set, k)], sizeof(float)) != 0) ++differing;

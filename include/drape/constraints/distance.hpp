@@ -7,7 +7,9 @@
 // Float solves the constraints of a colour four at a time in SSE registers (DistanceBlock), or eight at a time
 // in AVX2 registers where the processor has them, lane by lane with exactly the scalar kernel's operations in
 // the same order, so all three give the same bits; the inverse masses of a block's ends come from LaneMasses,
-// two loads. Double runs the scalar kernel over the same layout.
+// two loads. Double runs the scalar kernel over the same layout. (A build for a processor with FMA, such as
+// -march=native, lets the compiler fuse a * b + c in the scalar and SSE kernels; they then round a little
+// differently from the AVX2 kernel, which never fuses. Each kernel is still deterministic.)
 
 #include <drape/cloth/asset.hpp>
 #include <drape/detail/parallel.hpp>
