@@ -378,8 +378,10 @@ template <Scalar S, class... Shapes> class BasicSolver {
     }
   }
 
-  /// The constraint blocks' copies of the inverse masses, after any change of a mass.
+  /// The constraint blocks' copies of the inverse masses, after any change of a mass. Only the float SIMD kernels
+  /// read them: double runs the scalar kernel on the masses themselves.
   void gatherLaneMasses() {
+    if constexpr (!std::is_same_v<S, float>) return;
     laneMasses_[0].gather(asset_->stretch, state_.invMass.data());
     laneMasses_[1].gather(asset_->shear, state_.invMass.data());
     laneMasses_[2].gather(asset_->bending, state_.invMass.data());

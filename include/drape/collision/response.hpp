@@ -80,7 +80,8 @@ template <Scalar S> struct ContactBuffer {
 
   /// Records that vertex i was placed at x, dn along n, out of a solid moving with m. A vertex's first contact
   /// of the substep (nearly every one) takes the inlined path; further ones merge in recordMore.
-  DRAPE_ALWAYS_INLINE void record(Index i, const Vec3<S>& x, const Vec3<S>& n, const Vec3<S>& vc, S dn, const SolidMotion<S>& m) {
+  DRAPE_ALWAYS_INLINE void record(Index i, const Vec3<S>& x, const Vec3<S>& n, const Vec3<S>& vc, S dn,
+                                  const SolidMotion<S>& m) {
     if (stamp[i] != current) {
       stamp[i] = current;
       slotCount[i] = 1;
