@@ -167,8 +167,9 @@ template <drape::Scalar S> nlohmann::ordered_json run(const Options& o) {
   }
 
   std::vector<double> stepMs;
-  double maxPen = 0, maxPenPinned = 0, maxPenAtBodies = 0, maxFloorPen = 0, maxBodySpeed = 0, maxClothSpeed = 0;
-  int maxPenStep = 0, maxBodySpeedStep = 0;
+  double maxPen = 0, maxPenPinned = 0, maxPenAtBodies = 0, maxFloorPen = 0, maxBodySpeed = 0, maxClothSpeed = 0,
+         maxBodySpin = 0;
+  int maxPenStep = 0, maxBodySpeedStep = 0, maxBodySpinStep = 0;
   int throughAtRelease = -1, offAtRelease = -1;
   bool finite = true;
   // Bodies that went through the cloth (centre below the cloth vertex nearest in x, y, while over the cloth)
@@ -216,6 +217,8 @@ template <drape::Scalar S> nlohmann::ordered_json run(const Options& o) {
       const double v = world.body(b).linearVelocity().norm(), z = world.body(b).pose().position.z();
       finite = finite && std::isfinite(v) && world.body(b).pose().position.allFinite();
       if (v > maxBodySpeed) maxBodySpeed = v, maxBodySpeedStep = s;
+      const double w = world.body(b).angularVelocity().norm();
+      if (w > maxBodySpin) maxBodySpin = w, maxBodySpinStep = s;
       stepBodySpeed = std::max(stepBodySpeed, v);
       bodyZMin = std::min(bodyZMin, z), bodyZMax = std::max(bodyZMax, z);
     }
@@ -283,6 +286,8 @@ template <drape::Scalar S> nlohmann::ordered_json run(const Options& o) {
   j["max_body_speed"] = maxBodySpeed;
   j["max_body_speed_step"] = maxBodySpeedStep;
   j["body_speed_energy_bound"] = speedBound;
+  j["max_body_spin"] = maxBodySpin;  // rad/s
+  j["max_body_spin_step"] = maxBodySpinStep;
   j["max_cloth_speed"] = maxClothSpeed;
   if (throughAtRelease >= 0) {
     j["bodies_through_cloth_at_release"] = throughAtRelease;
@@ -352,7 +357,8 @@ int main(int argc, char** argv) {
                  "  %.3f ms/step median (%.3f mean, %.2f s in all)\n"
                  "  deepest cloth vertex in a body %.3g m (step %d; %.3g m while pinned; %.3g m at the bodies' end "
                  "poses), below the floor %.3g m\n"
-                 "  fastest body %.3g m/s (step %d; own-energy bound %.3g), fastest cloth vertex %.3g m/s\n"
+                 "  fastest body %.3g m/s (step %d; own-energy bound %.3g), fastest spin %.3g rad/s (step %d),\n"
+                 "  fastest cloth vertex %.3g m/s\n"
                  "  final body centres z %.3g / %.3g / %.3g m (min/median/max), lowest body point %.3g m, strain max %.3g\n",
                  j["bodies"].get<int>(), c.seed, estimator.c_str(), scalar.c_str(), j["steps"].get<int>(), c.dt,
                  c.subSteps, c.release, j["ms_per_step"].get<double>(), j["ms_per_step_mean"].get<double>(),
@@ -360,7 +366,8 @@ int main(int argc, char** argv) {
                  j["max_penetration_step"].get<int>(), j["max_penetration_pinned"].get<double>(),
                  j["max_penetration_at_bodies"].get<double>(), j["max_floor_penetration"].get<double>(),
                  j["max_body_speed"].get<double>(), j["max_body_speed_step"].get<int>(),
-                 j["body_speed_energy_bound"].get<double>(), j["max_cloth_speed"].get<double>(),
+                 j["body_speed_energy_bound"].get<double>(), j["max_body_spin"].get<double>(),
+                 j["max_body_spin_step"].get<int>(), j["max_cloth_speed"].get<double>(),
                  j["final_body_z_min"].get<double>(), j["final_body_z_median"].get<double>(),
                  j["final_body_z_max"].get<double>(), j["final_lowest_body_point"].get<double>(),
                  j["final_max_strain"].get<double>());
