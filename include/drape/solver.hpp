@@ -251,7 +251,7 @@ template <Scalar S, class... Shapes> class BasicSolver {
                   if (list[k].motion == Motion::Dynamic) {
                     out[k].motion.body = std::int32_t(bodies_.size());
                     bodies_.push_back(list[k].body);
-                    bodyCentre_.push_back(list[k].body->pose().position);
+                    bodyCentre_.push_back(list[k].pose.position);  // the field's centre, not the body's now
                   }
                 }
               }(lists),
@@ -446,6 +446,7 @@ template <Scalar S, class... Shapes> class BasicSolver {
     const ContactForce estimator = settings_.contactForce;
     const bool propagated = estimator == ContactForce::Impulse && settings_.propagationRings > 0 &&
                             settings_.propagationWeight > 0 && settings_.collisionMethod == CollisionMethod::Improved;
+    pinch_.assign(bodies_.size(), Pinch{});
     for (Index i = 0; i < vertexCount(); ++i) {
       if (!contacts_.live(i)) {
         if (propagated) gatherPropagatedImpulse(i, h, thickness);
@@ -478,7 +479,9 @@ template <Scalar S, class... Shapes> class BasicSolver {
       }
       for (int k = 0; k < count; ++k) {
         const ContactSlot<S>& c = slots[k];
-        if (c.body < 0 || (oneBody && k != top)) continue;
+        if (c.body < 0) continue;
+        if (count > 1 && !oneBody && pinchSupport(i, k, h, thickness)) continue;
+        if (oneBody && k != top) continue;
         const Vec3<S>& n = c.normal;
         Vec3<S> onBody = Vec3<S>::Zero();
         switch (estimator) {
@@ -505,13 +508,88 @@ template <Scalar S, class... Shapes> class BasicSolver {
             break;
           }
         }
-        Eigen::Vector3d force = onBody.template cast<double>();
-        if (settings_.normalForceOnly) force = force.dot(n.template cast<double>()) * n.template cast<double>();
-        const Eigen::Vector3d point = state_.origin + (state_.x[i] - thickness * n).template cast<double>();
-        bodyForce_[c.body] += force;
-        bodyTorque_[c.body] += (point - bodyCentre_[c.body]).cross(force);
+        addBodyForce(c, i, onBody.template cast<double>(), thickness);
       }
     }
+    // Each pinch's support was sized to hold the body alone; a body on several shares it among them.
+    for (std::size_t b = 0; b < pinch_.size(); ++b) {
+      if (pinch_[b].count == 0) continue;
+      bodyForce_[b] += pinch_[b].force / pinch_[b].count;
+      bodyTorque_[b] += pinch_[b].torque / pinch_[b].count;
+    }
+  }
+
+  /// A vertex held between slot k's body and a fixed (static or kinematic) solid facing it cannot pass on the
+  /// solid's push through its own momentum: its mass is far too small, and the estimates above would hand the
+  /// body a force of about m_vertex / h^2 per metre of overlap, which let a ball sink through a cloth lying on
+  /// the floor to the floor itself (where the pinched vertices then shot out sideways at tens of m/s). The
+  /// pinched cloth is a spacer instead: the solid holds the body through it, with the impulse that stops the
+  /// body's approach at that point (its effective mass there), plus a fifth of the overlap per substep, and
+  /// Coulomb friction with the slot's coefficients against the body's sliding over the vertex. Recorded in
+  /// pinch_ and shared out among the body's pinches at the end. Returns false (nothing recorded) when the
+  /// vertex is not pinched against a fixed solid.
+  bool pinchSupport(Index i, int k, S h, S thickness) {
+    const auto& slots = contacts_.slots[i];
+    const ContactSlot<S>& c = slots[k];
+    int against = -1;
+    for (int j = 0; j < contacts_.slotCount[i]; ++j)
+      if (j != k && slots[j].body < 0 && slots[j].normal.dot(c.normal) < S(-0.5)) against = j;
+    if (against < 0) return false;
+    const CoupledBody& body = *bodies_[std::size_t(c.body)];
+    const Eigen::Vector3d n = c.normal.template cast<double>();
+    const Eigen::Vector3d r = touchPoint(c, i, thickness);
+    const Eigen::Vector3d centre = bodyCentre_[std::size_t(c.body)];
+    const Eigen::Vector3d wall = slots[against].solidVelocity.template cast<double>();
+    S deficit = std::max(c.offset - c.normal.dot(state_.x[i]), S(0));
+    for (int j = 0; j < contacts_.slotCount[i]; ++j)
+      if (j != k)
+        deficit += std::max(slots[j].offset - slots[j].normal.dot(state_.x[i]), S(0)) *
+                   std::max(-slots[j].normal.dot(c.normal), S(0));
+    const double approach = (body.velocityAt(centre + r) - wall).dot(n) + kPinchRate * double(deficit) / double(h);
+    const Eigen::Vector3d rn = r.cross(n);
+    const double kn = body.inverseMass() + rn.dot(body.inverseInertiaWorld() * rn);
+    Pinch& p = pinch_[std::size_t(c.body)];
+    ++p.count;
+    if (!(approach > 0) || !(kn > 0)) return true;
+    const double push = approach / (kn * double(h));  // N, on the body along -n
+    Eigen::Vector3d force = -push * n;
+    Eigen::Vector3d slide = body.velocityAt(centre + r) - state_.v[i].template cast<double>();
+    slide -= slide.dot(n) * n;
+    const double speed = slide.norm();
+    if (speed > 0 && !settings_.normalForceOnly) {
+      slide /= speed;
+      const Eigen::Vector3d rt = r.cross(slide);
+      const double stop = speed / ((body.inverseMass() + rt.dot(body.inverseInertiaWorld() * rt)) * double(h));
+      force -= (stop <= double(c.staticFriction) * push ? stop : std::min(stop, double(c.dynamicFriction) * push)) * slide;
+    }
+    addWrench(c, i, force, thickness, p.force, p.torque);
+    return true;
+  }
+
+  /// A force f on contact slot c's body from vertex `at` (the reverse of what the vertex got: Newton's third
+  /// law holds exactly), with its moment about the body's centre, added to (force, torque). The moment of the
+  /// normal part (along the slot's normal) is spread over the slot's contacts' own lines, as if it acted along
+  /// their mean normal with their mean moment (ContactSlot::push, moment), its size along the slot's normal
+  /// kept. The tangential part, friction on the vertex, acts where the vertex touches the surface.
+  void addWrench(const ContactSlot<S>& c, Index at, Eigen::Vector3d f, S thickness, Eigen::Vector3d& force,
+                 Eigen::Vector3d& torque) const {
+    const Eigen::Vector3d n = c.normal.template cast<double>();
+    const double fn = f.dot(n), along = c.push.template cast<double>().dot(n);
+    if (settings_.normalForceOnly) f = fn * n;
+    const Eigen::Vector3d touch = touchPoint(c, at, thickness);
+    force += f;
+    if (along > 0.5)  // the contacts' normals agree (always, unless a slot took in another direction)
+      torque += (fn / along) * c.moment.template cast<double>() + touch.cross(f - fn * n);
+    else
+      torque += touch.cross(f);
+  }
+  void addBodyForce(const ContactSlot<S>& c, Index at, const Eigen::Vector3d& f, S thickness) {
+    addWrench(c, at, f, thickness, bodyForce_[std::size_t(c.body)], bodyTorque_[std::size_t(c.body)]);
+  }
+  /// Where vertex `at` touches slot c's surface, from the body's centre (world axes).
+  Eigen::Vector3d touchPoint(const ContactSlot<S>& c, Index at, S thickness) const {
+    return (state_.x[at] - thickness * c.normal).template cast<double>() + state_.origin -
+           bodyCentre_[std::size_t(c.body)];
   }
 
   /// Propagation gave vertex i (not in contact) a velocity change on behalf of its contact neighbours: the
@@ -526,12 +604,7 @@ template <Scalar S, class... Shapes> class BasicSolver {
       const auto& slots = contacts_.slots[*j];
       for (int k = 0; k < contacts_.slotCount[*j]; ++k) {
         if (slots[k].body < 0) continue;
-        const Vec3<S>& n = slots[k].normal;
-        Eigen::Vector3d force = (-(dv / (state_.invMass[i] * h))).template cast<double>();
-        if (settings_.normalForceOnly) force = force.dot(n.template cast<double>()) * n.template cast<double>();
-        const Eigen::Vector3d point = state_.origin + (state_.x[*j] - thickness * n).template cast<double>();
-        bodyForce_[slots[k].body] += force;
-        bodyTorque_[slots[k].body] += (point - bodyCentre_[slots[k].body]).cross(force);
+        addBodyForce(slots[k], *j, (-(dv / (state_.invMass[i] * h))).template cast<double>(), thickness);
         return;
       }
     }
@@ -680,6 +753,7 @@ template <Scalar S, class... Shapes> class BasicSolver {
   static constexpr double kMaxSpeed = 1e5;        ///< m/s, largest accepted vertex speed
   static constexpr double kMinSubStep = 1e-6;     ///< s, below this h^2 underflows float
   static constexpr int kSettlePasses = 4;         ///< extra vertex passes where solids meet
+  static constexpr double kPinchRate = 0.2;       ///< share of a pinch's overlap its support undoes per substep
 
   std::shared_ptr<const ClothAsset<S>> asset_;
   Settings settings_;
@@ -706,9 +780,17 @@ template <Scalar S, class... Shapes> class BasicSolver {
   std::vector<Index> nearVertices_, nearFaces_;  ///< what the grid found near the current solid
   S moveBound_ = 0;  ///< the passes' largest vertex moves, summed (shared by the team)
   std::vector<CoupledBody*> bodies_;                    ///< the dynamic solids' bodies, this substep
-  std::vector<Eigen::Vector3d> bodyCentre_;             ///< their centres of mass at the substep's start
+  /// Their centres of mass where the substep's contacts were found (advancePose: the start, carried by the
+  /// velocity over the substep); torques are taken about them, so a force along a field's normal through a
+  /// ball's centre has no moment.
+  std::vector<Eigen::Vector3d> bodyCentre_;
   std::vector<Eigen::Vector3d> bodyForce_, bodyTorque_;  ///< what the cloth passed to each, this substep
   std::vector<Vec3<S>> vStart_, vPre_;                  ///< velocities at the substep's start, before contacts
+  struct Pinch {  ///< a body's pinchSupport sums this substep
+    Eigen::Vector3d force = Eigen::Vector3d::Zero(), torque = Eigen::Vector3d::Zero();
+    int count = 0;
+  };
+  std::vector<Pinch> pinch_;
 };
 
 /// The solver with every built-in shape: the analytic ones, the rigid bodies' cylinders and convex hulls, and

@@ -24,6 +24,16 @@ template <Scalar S> struct ContactSlot {
   S staticFriction, dynamicFriction;
   S offset;               ///< the surface as a half-space: normal . x >= offset where the vertex was placed
   std::int32_t body;      ///< the coupled body the surface belongs to, -1 for none (SolidMotion::body)
+  /// Where a force passed back to the solid's body acts, relative to the solid's frame origin (a body's centre
+  /// of mass), averaged over the slot's contacts weighted by their corrections. Each contact is found at a point
+  /// p the thickness out of the surface along its normal n: the vertex, or for a face contact the face's deepest
+  /// point. `push` is the mean of n and `moment` the mean of (p - centre) x n: the slot's normal push is spread
+  /// over its contacts' own lines, so force and moment belong together. On a ball every such line passes through
+  /// the centre and the push has no moment. A lever taken from the vertex's final position (moved since by other
+  /// contacts, a face's other corners, the response), or from one of the several contacts (the last face, in
+  /// index order: always the same side), would twist it.
+  Vec3<S> push;
+  Vec3<S> moment;
 };
 
 /// Per-vertex contact records of one substep. A vertex may touch up to kSlots differently-facing surfaces
@@ -78,21 +88,25 @@ template <Scalar S> struct ContactBuffer {
     return sum;
   }
 
-  /// Records that vertex i was placed at x, dn along n, out of a solid moving with m. A vertex's first contact
-  /// of the substep (nearly every one) takes the inlined path; further ones merge in recordMore.
+  /// Records that vertex i was placed at x, dn along n, out of a solid moving with m; `anchor` is the placed
+  /// point the contact was found at (x itself for a vertex contact, the face's deepest point for a face contact).
+  /// A vertex's first contact of the substep (nearly every one) takes the inlined path; further ones merge in
+  /// recordMore.
   DRAPE_ALWAYS_INLINE void record(Index i, const Vec3<S>& x, const Vec3<S>& n, const Vec3<S>& vc, S dn,
-                                  const SolidMotion<S>& m) {
+                                  const SolidMotion<S>& m, const Vec3<S>& anchor) {
     if (stamp[i] != current) {
       stamp[i] = current;
       slotCount[i] = 1;
-      slots[i][0] = {n, vc, dn, m.staticFriction, m.dynamicFriction, n.dot(x), m.body};
+      const Vec3<S> r = anchor - m.centre;
+      slots[i][0] = {n, vc, dn, m.staticFriction, m.dynamicFriction, n.dot(x), m.body, n, r.cross(n)};
       return;
     }
-    recordMore(i, x, n, vc, dn, m);
+    recordMore(i, x, n, vc, dn, m, anchor);
   }
 
  private:
-  void recordMore(Index i, const Vec3<S>& x, const Vec3<S>& n, const Vec3<S>& vc, S dn, const SolidMotion<S>& m) {
+  void recordMore(Index i, const Vec3<S>& x, const Vec3<S>& n, const Vec3<S>& vc, S dn, const SolidMotion<S>& m,
+                  const Vec3<S>& anchor) {
     auto& own = slots[i];
     int best = -1;
     S bestCos = kMergeCos;
@@ -101,7 +115,8 @@ template <Scalar S> struct ContactBuffer {
       if (c >= bestCos) best = k, bestCos = c;
     }
     if (best < 0 && slotCount[i] < kSlots) {
-      own[slotCount[i]++] = {n, vc, dn, m.staticFriction, m.dynamicFriction, n.dot(x), m.body};
+      const Vec3<S> r = anchor - m.centre;
+      own[slotCount[i]++] = {n, vc, dn, m.staticFriction, m.dynamicFriction, n.dot(x), m.body, n, r.cross(n)};
       return;
     }
     if (best < 0) {  // all slots taken by other directions: join the closest
@@ -109,11 +124,17 @@ template <Scalar S> struct ContactBuffer {
       for (int k = 0; k < kSlots; ++k)
         if (own[k].normal.dot(n) > bestCos) best = k, bestCos = own[k].normal.dot(n);
     }
+    const S total = own[best].correction + dn;
+    if (total > S(0)) {  // this contact's share of the slot's push and moment
+      const S share = dn / total;
+      own[best].push += share * (n - own[best].push);
+      own[best].moment += share * ((anchor - m.centre).cross(n) - own[best].moment);
+    }
     if (bestCos >= kMergeCos) {  // the same surface, seen again: its latest normal and placement
       own[best].normal = n;
       own[best].offset = n.dot(x);
       own[best].body = m.body;
-    } else {
+    } else {  // another direction joins the slot, whose normal stays
       own[best].offset = std::max(own[best].offset, own[best].normal.dot(x));
     }
     own[best].solidVelocity = vc;
@@ -185,7 +206,7 @@ void projectVertexContacts(const CompiledSolid<Shape, S>& solid, S thickness, Ve
     if (phi >= thickness - slack) continue;
     const S dn = thickness - phi;
     x[i] += dn * n;
-    contacts.record(i, x[i], n, solid.motion.velocityAt(x[i]), dn, solid.motion);
+    contacts.record(i, x[i], n, solid.motion.velocityAt(x[i]), dn, solid.motion, x[i]);
     moved = std::max(moved, (x[i] - binned[i]).squaredNorm());
     ++found;
   }
@@ -223,11 +244,12 @@ S projectFaceContacts(const CompiledSolid<Shape, S>& solid, S thickness, int pgd
     if (denom <= S(0)) continue;
     ++stats.faceContacts;
     const S depth = thickness - q.phi;
+    const Vec3<S> placed = q.point + depth * q.normal;  // the moves below carry the deepest point there
     for (int k = 0; k < 3; ++k) {
       if (wb[k] <= S(0)) continue;
       const S dn = wb[k] / denom * depth;
       x[t[k]] += dn * q.normal;
-      contacts.record(t[k], x[t[k]], q.normal, solid.motion.velocityAt(x[t[k]]), dn, solid.motion);
+      contacts.record(t[k], x[t[k]], q.normal, solid.motion.velocityAt(x[t[k]]), dn, solid.motion, placed);
       moved = std::max(moved, (x[t[k]] - binned[t[k]]).squaredNorm());
     }
   }
