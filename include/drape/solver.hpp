@@ -537,7 +537,7 @@ template <Scalar S, class... Shapes> class BasicSolver {
     if (against < 0) return false;
     const CoupledBody& body = *bodies_[std::size_t(c.body)];
     const Eigen::Vector3d n = c.normal.template cast<double>();
-    const Eigen::Vector3d r = touchPoint(c, i, thickness);
+    const Eigen::Vector3d r = contactPoint(c, i, thickness);
     const Eigen::Vector3d centre = bodyCentre_[std::size_t(c.body)];
     const Eigen::Vector3d wall = slots[against].solidVelocity.template cast<double>();
     S deficit = std::max(c.offset - c.normal.dot(state_.x[i]), S(0));
@@ -567,29 +567,31 @@ template <Scalar S, class... Shapes> class BasicSolver {
   }
 
   /// A force f on contact slot c's body from vertex `at` (the reverse of what the vertex got: Newton's third
-  /// law holds exactly), with its moment about the body's centre, added to (force, torque). The moment of the
-  /// normal part (along the slot's normal) is spread over the slot's contacts' own lines, as if it acted along
-  /// their mean normal with their mean moment (ContactSlot::push, moment), its size along the slot's normal
-  /// kept. The tangential part, friction on the vertex, acts where the vertex touches the surface.
+  /// law holds exactly), acting at contactPoint, added to (force, torque) about the body's centre.
   void addWrench(const ContactSlot<S>& c, Index at, Eigen::Vector3d f, S thickness, Eigen::Vector3d& force,
                  Eigen::Vector3d& torque) const {
-    const Eigen::Vector3d n = c.normal.template cast<double>();
-    const double fn = f.dot(n), along = c.push.template cast<double>().dot(n);
-    if (settings_.normalForceOnly) f = fn * n;
-    const Eigen::Vector3d touch = touchPoint(c, at, thickness);
+    if (settings_.normalForceOnly) {
+      const Eigen::Vector3d n = c.normal.template cast<double>();
+      f = f.dot(n) * n;
+    }
     force += f;
-    if (along > 0.5)  // the contacts' normals agree (always, unless a slot took in another direction)
-      torque += (fn / along) * c.moment.template cast<double>() + touch.cross(f - fn * n);
-    else
-      torque += touch.cross(f);
+    torque += contactPoint(c, at, thickness).cross(f);
   }
   void addBodyForce(const ContactSlot<S>& c, Index at, const Eigen::Vector3d& f, S thickness) {
     addWrench(c, at, f, thickness, bodyForce_[std::size_t(c.body)], bodyTorque_[std::size_t(c.body)]);
   }
-  /// Where vertex `at` touches slot c's surface, from the body's centre (world axes).
-  Eigen::Vector3d touchPoint(const ContactSlot<S>& c, Index at, S thickness) const {
-    return (state_.x[at] - thickness * c.normal).template cast<double>() + state_.origin -
-           bodyCentre_[std::size_t(c.body)];
+  /// Where slot c's push acts on its body, from the body's centre (world axes): on the line along the slot's
+  /// normal n whose moment is its contacts' mean moment (ContactSlot::push, moment; the foot of the perpendicular
+  /// from the centre is n x moment / (push . n)), at the height along n where vertex `at` touches the surface.
+  /// So a normal push has the moment of the contacts that made it (none on a ball), and a vertex pushed through a
+  /// face's deepest point, which may not touch the body at all, pushes there.
+  Eigen::Vector3d contactPoint(const ContactSlot<S>& c, Index at, S thickness) const {
+    const Eigen::Vector3d n = c.normal.template cast<double>();
+    const Eigen::Vector3d touch =
+        (state_.x[at] - thickness * c.normal).template cast<double>() + state_.origin - bodyCentre_[std::size_t(c.body)];
+    const double along = c.push.template cast<double>().dot(n);
+    if (!(along > 0.5)) return touch;  // the slot took in another direction: its contacts do not share a line
+    return n.cross(c.moment.template cast<double>() / along) + touch.dot(n) * n;
   }
 
   /// Propagation gave vertex i (not in contact) a velocity change on behalf of its contact neighbours: the
