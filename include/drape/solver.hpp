@@ -266,6 +266,7 @@ template <Scalar S, class... Shapes> class BasicSolver {
     coupled_ = !bodies_.empty();
     bodyForce_.assign(bodies_.size(), Eigen::Vector3d::Zero());
     bodyTorque_.assign(bodies_.size(), Eigen::Vector3d::Zero());
+    contacts_.keepLines(coupled_);
     if (coupled_ && vStart_.size() != state_.v.size()) {
       vStart_.resize(state_.v.size());
       vPre_.resize(state_.v.size());
@@ -581,17 +582,18 @@ template <Scalar S, class... Shapes> class BasicSolver {
     addWrench(c, at, f, thickness, bodyForce_[std::size_t(c.body)], bodyTorque_[std::size_t(c.body)]);
   }
   /// Where slot c's push acts on its body, from the body's centre (world axes): on the line along the slot's
-  /// normal n whose moment is its contacts' mean moment (ContactSlot::push, moment; the foot of the perpendicular
+  /// normal n whose moment is its contacts' mean moment (ContactLine; the foot of the perpendicular
   /// from the centre is n x moment / (push . n)), at the height along n where vertex `at` touches the surface.
   /// So a normal push has the moment of the contacts that made it (none on a ball), and a vertex pushed through a
   /// face's deepest point, which may not touch the body at all, pushes there.
   Eigen::Vector3d contactPoint(const ContactSlot<S>& c, Index at, S thickness) const {
+    const ContactLine<S>& line = contacts_.lines[std::size_t(at)][std::size_t(&c - contacts_.slots[at].data())];
     const Eigen::Vector3d n = c.normal.template cast<double>();
     const Eigen::Vector3d touch =
         (state_.x[at] - thickness * c.normal).template cast<double>() + state_.origin - bodyCentre_[std::size_t(c.body)];
-    const double along = c.push.template cast<double>().dot(n);
+    const double along = line.push.template cast<double>().dot(n);
     if (!(along > 0.5)) return touch;  // the slot took in another direction: its contacts do not share a line
-    return n.cross(c.moment.template cast<double>() / along) + touch.dot(n) * n;
+    return n.cross(line.moment.template cast<double>() / along) + touch.dot(n) * n;
   }
 
   /// Propagation gave vertex i (not in contact) a velocity change on behalf of its contact neighbours: the

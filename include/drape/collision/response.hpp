@@ -24,14 +24,18 @@ template <Scalar S> struct ContactSlot {
   S staticFriction, dynamicFriction;
   S offset;               ///< the surface as a half-space: normal . x >= offset where the vertex was placed
   std::int32_t body;      ///< the coupled body the surface belongs to, -1 for none (SolidMotion::body)
-  /// Where a force passed back to the solid's body acts, relative to the solid's frame origin (a body's centre
-  /// of mass), averaged over the slot's contacts weighted by their corrections. Each contact is found at a point
-  /// p the thickness out of the surface along its normal n: the vertex, or for a face contact the face's deepest
-  /// point. `push` is the mean of n and `moment` the mean of (p - centre) x n: the slot's normal push is spread
-  /// over its contacts' own lines, so force and moment belong together. On a ball every such line passes through
-  /// the centre and the push has no moment. A lever taken from the vertex's final position (moved since by other
-  /// contacts, a face's other corners, the response), or from one of the several contacts (the last face, in
-  /// index order: always the same side), would twist it.
+};
+
+/// Where the force a contact slot passes back to a coupled body acts, relative to the body's centre (the solid's
+/// frame origin), averaged over the slot's contacts weighted by their corrections. Each contact is found at a
+/// point p the thickness out of the surface along its normal n: the vertex, or for a face contact the face's
+/// deepest point. `push` is the mean of n and `moment` the mean of (p - centre) x n: the slot's normal push is
+/// spread over its contacts' own lines, so force and moment belong together. On a ball every such line passes
+/// through the centre and the push has no moment. A lever taken from the vertex's final position (moved since by
+/// other contacts, a face's other corners, the response), or from one of the several contacts (the last face, in
+/// index order: always the same side), would twist it. Kept only for the slots of coupled bodies, and only in a
+/// scene that has them (ContactBuffer::lines).
+template <Scalar S> struct ContactLine {
   Vec3<S> push;
   Vec3<S> moment;
 };
@@ -50,6 +54,9 @@ template <Scalar S> struct ContactBuffer {
   std::vector<std::array<ContactSlot<S>, kSlots>> slots;
   std::vector<std::uint8_t> slotCount;
   std::vector<S> normalDv;  ///< normal velocity change the response made (m/s), the source of propagation
+  /// Per vertex and slot, the lines of a coupled body's contacts (ContactLine): sized by keepLines, written only
+  /// by record<true>, read only for slots whose body is >= 0.
+  std::vector<std::array<ContactLine<S>, kSlots>> lines;
 
   void resize(Index n) {
     stamp.assign(n, 0);
@@ -63,6 +70,11 @@ template <Scalar S> struct ContactBuffer {
       std::fill(stamp.begin(), stamp.end(), 0);
       current = 1;
     }
+  }
+  /// Keeps the lines of coupled bodies' contacts (a scene with coupled bodies), or frees them.
+  void keepLines(bool keep) {
+    if (keep && lines.size() != stamp.size()) lines.resize(stamp.size());
+    if (!keep && !lines.empty()) std::vector<std::array<ContactLine<S>, kSlots>>().swap(lines);
   }
   bool live(Index i) const { return stamp[i] == current; }
   Index size() const { return Index(stamp.size()); }
@@ -88,25 +100,29 @@ template <Scalar S> struct ContactBuffer {
     return sum;
   }
 
-  /// Records that vertex i was placed at x, dn along n, out of a solid moving with m; `anchor` is the placed
-  /// point the contact was found at (x itself for a vertex contact, the face's deepest point for a face contact).
-  /// A vertex's first contact of the substep (nearly every one) takes the inlined path; further ones merge in
+  /// Records that vertex i was placed at x, dn along n, out of a solid moving with m (its velocity there is the
+  /// slot's solidVelocity); `anchor` is the placed point the contact was found at (x itself for a vertex contact,
+  /// the face's deepest point for a face contact). kBody: the solid is a coupled body (m.body >= 0), whose slots
+  /// keep a ContactLine; other solids' contacts write none, so a scene without bodies does not pay for them. A
+  /// vertex's first contact of the substep (nearly every one) takes the inlined path; further ones merge in
   /// recordMore.
-  DRAPE_ALWAYS_INLINE void record(Index i, const Vec3<S>& x, const Vec3<S>& n, const Vec3<S>& vc, S dn,
-                                  const SolidMotion<S>& m, const Vec3<S>& anchor) {
+  template <bool kBody>
+  DRAPE_ALWAYS_INLINE void record(Index i, const Vec3<S>& x, const Vec3<S>& n, S dn, const SolidMotion<S>& m,
+                                  const Vec3<S>& anchor) {
     if (stamp[i] != current) {
       stamp[i] = current;
       slotCount[i] = 1;
-      const Vec3<S> r = anchor - m.centre;
-      slots[i][0] = {n, vc, dn, m.staticFriction, m.dynamicFriction, n.dot(x), m.body, n, r.cross(n)};
+      slots[i][0] = {n, m.velocityAt(x), dn, m.staticFriction, m.dynamicFriction, n.dot(x), m.body};
+      if constexpr (kBody) lines[i][0] = {n, (anchor - m.centre).cross(n)};
       return;
     }
-    recordMore(i, x, n, vc, dn, m, anchor);
+    recordMore<kBody>(i, x, n, dn, m, anchor);
   }
 
  private:
-  void recordMore(Index i, const Vec3<S>& x, const Vec3<S>& n, const Vec3<S>& vc, S dn, const SolidMotion<S>& m,
-                  const Vec3<S>& anchor) {
+  template <bool kBody>
+  void recordMore(Index i, const Vec3<S>& x, const Vec3<S>& n, S dn, const SolidMotion<S>& m, const Vec3<S>& anchor) {
+    const Vec3<S> vc = m.velocityAt(x);
     auto& own = slots[i];
     int best = -1;
     S bestCos = kMergeCos;
@@ -115,8 +131,8 @@ template <Scalar S> struct ContactBuffer {
       if (c >= bestCos) best = k, bestCos = c;
     }
     if (best < 0 && slotCount[i] < kSlots) {
-      const Vec3<S> r = anchor - m.centre;
-      own[slotCount[i]++] = {n, vc, dn, m.staticFriction, m.dynamicFriction, n.dot(x), m.body, n, r.cross(n)};
+      if constexpr (kBody) lines[i][slotCount[i]] = {n, (anchor - m.centre).cross(n)};
+      own[slotCount[i]++] = {n, vc, dn, m.staticFriction, m.dynamicFriction, n.dot(x), m.body};
       return;
     }
     if (best < 0) {  // all slots taken by other directions: join the closest
@@ -124,11 +140,16 @@ template <Scalar S> struct ContactBuffer {
       for (int k = 0; k < kSlots; ++k)
         if (own[k].normal.dot(n) > bestCos) best = k, bestCos = own[k].normal.dot(n);
     }
-    const S total = own[best].correction + dn;
-    if (total > S(0)) {  // this contact's share of the slot's push and moment
-      const S share = dn / total;
-      own[best].push += share * (n - own[best].push);
-      own[best].moment += share * ((anchor - m.centre).cross(n) - own[best].moment);
+    if constexpr (kBody) {
+      ContactLine<S>& line = lines[i][best];
+      const S total = own[best].correction + dn;
+      if (own[best].body != m.body) {
+        if (bestCos >= kMergeCos) line = {n, (anchor - m.centre).cross(n)};  // the slot becomes this body's
+      } else if (total > S(0)) {  // this contact's share of the slot's push and moment
+        const S share = dn / total;
+        line.push += share * (n - line.push);
+        line.moment += share * ((anchor - m.centre).cross(n) - line.moment);
+      }
     }
     if (bestCos >= kMergeCos) {  // the same surface, seen again: its latest normal and placement
       own[best].normal = n;
@@ -191,10 +212,10 @@ template <Scalar S> void addMoveBound(S& bound, S mine) {
 /// Moves every free vertex of `ids` (count of them) closer than `thickness` (by more than `slack`) out along
 /// the normal and records the contact; `moveBound` grows by at least the largest distance of a moved vertex
 /// from `binned` (addMoveBound). A work-shared loop; the counts are added once per thread.
-template <class Shape, Scalar S, class Ids>
-void projectVertexContacts(const CompiledSolid<Shape, S>& solid, S thickness, Vec3<S>* x, const S* invMass, Ids ids,
-                           Index count, ContactBuffer<S>& contacts, CollisionStats& stats, const Vec3<S>* binned,
-                           S& moveBound, S slack = S(0)) {
+template <bool kBody, class Shape, Scalar S, class Ids>
+void projectVertexContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, Vec3<S>* x, const S* invMass,
+                             Ids ids, Index count, ContactBuffer<S>& contacts, CollisionStats& stats,
+                             const Vec3<S>* binned, S& moveBound, S slack) {
   std::int64_t found = 0;
   S moved = 0;
   DRAPE_OMP(for schedule(static) nowait)
@@ -206,7 +227,7 @@ void projectVertexContacts(const CompiledSolid<Shape, S>& solid, S thickness, Ve
     if (phi >= thickness - slack) continue;
     const S dn = thickness - phi;
     x[i] += dn * n;
-    contacts.record(i, x[i], n, solid.motion.velocityAt(x[i]), dn, solid.motion, x[i]);
+    contacts.template record<kBody>(i, x[i], n, dn, solid.motion, x[i]);
     moved = std::max(moved, (x[i] - binned[i]).squaredNorm());
     ++found;
   }
@@ -217,16 +238,25 @@ void projectVertexContacts(const CompiledSolid<Shape, S>& solid, S thickness, Ve
   addMoveBound(moveBound, std::sqrt(moved));
   DRAPE_OMP(barrier)
 }
+template <class Shape, Scalar S, class Ids>
+void projectVertexContacts(const CompiledSolid<Shape, S>& solid, S thickness, Vec3<S>* x, const S* invMass, Ids ids,
+                           Index count, ContactBuffer<S>& contacts, CollisionStats& stats, const Vec3<S>* binned,
+                           S& moveBound, S slack = S(0)) {
+  if (solid.motion.body >= 0)
+    projectVertexContactsAs<true>(solid, thickness, x, invMass, ids, count, contacts, stats, binned, moveBound, slack);
+  else
+    projectVertexContactsAs<false>(solid, thickness, x, invMass, ids, count, contacts, stats, binned, moveBound, slack);
+}
 
 /// For every face: cull by bounding sphere (when kCull), find the deepest point by PGD, and if it is closer
 /// than `thickness`, move the face's vertices, weighted by barycentric weight and inverse mass
 /// (dx_i = w_i b_i / sum_j w_j b_j^2 * depth * n), so that point reaches the thickness. Visits the faces `ids`
 /// (count of them) in order. Returns the largest distance of a moved vertex from `binned`. Serial: neighbouring
 /// faces share vertices.
-template <bool kCull, class Shape, Scalar S, class Ids>
-S projectFaceContacts(const CompiledSolid<Shape, S>& solid, S thickness, int pgdIterations,
-                      const std::vector<std::array<Index, 3>>& triangles, Ids ids, Index count, Vec3<S>* x,
-                      const S* invMass, ContactBuffer<S>& contacts, CollisionStats& stats, const Vec3<S>* binned) {
+template <bool kCull, bool kBody, class Shape, Scalar S, class Ids>
+S projectFaceContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, int pgdIterations,
+                        const std::vector<std::array<Index, 3>>& triangles, Ids ids, Index count, Vec3<S>* x,
+                        const S* invMass, ContactBuffer<S>& contacts, CollisionStats& stats, const Vec3<S>* binned) {
   S moved = 0;
   for (Index f = 0; f < count; ++f) {
     const auto& t = triangles[std::size_t(ids[f])];
@@ -249,12 +279,22 @@ S projectFaceContacts(const CompiledSolid<Shape, S>& solid, S thickness, int pgd
       if (wb[k] <= S(0)) continue;
       const S dn = wb[k] / denom * depth;
       x[t[k]] += dn * q.normal;
-      contacts.record(t[k], x[t[k]], q.normal, solid.motion.velocityAt(x[t[k]]), dn, solid.motion, placed);
+      contacts.template record<kBody>(t[k], x[t[k]], q.normal, dn, solid.motion, placed);
       moved = std::max(moved, (x[t[k]] - binned[t[k]]).squaredNorm());
     }
   }
   stats.facesTested += count;
   return std::sqrt(moved);
+}
+template <bool kCull, class Shape, Scalar S, class Ids>
+S projectFaceContacts(const CompiledSolid<Shape, S>& solid, S thickness, int pgdIterations,
+                      const std::vector<std::array<Index, 3>>& triangles, Ids ids, Index count, Vec3<S>* x,
+                      const S* invMass, ContactBuffer<S>& contacts, CollisionStats& stats, const Vec3<S>* binned) {
+  if (solid.motion.body >= 0)
+    return projectFaceContactsAs<kCull, true>(solid, thickness, pgdIterations, triangles, ids, count, x, invMass,
+                                              contacts, stats, binned);
+  return projectFaceContactsAs<kCull, false>(solid, thickness, pgdIterations, triangles, ids, count, x, invMass,
+                                             contacts, stats, binned);
 }
 
 inline constexpr int kLeastSquaresSteps = 16;  ///< Jacobi steps for a point pinched between surfaces

@@ -1,6 +1,7 @@
 #pragma once
 // A solid: a shape, a pose, how it moves, and its friction with the cloth.
 
+#include <drape/detail/parallel.hpp>  // DRAPE_ALWAYS_INLINE
 #include <drape/rigid/coupling.hpp>
 #include <drape/sdf/convex.hpp>  // every shape's compileSdf must be declared before compileSolid
 #include <drape/sdf/grid.hpp>
@@ -60,7 +61,13 @@ template <Scalar S> struct SolidMotion {
   std::int32_t body = -1;  ///< index of the solver's coupled body this solid pushes; -1 for none
 
   /// v_c(x) = v_r + w x (x - x_r): the velocity of the solid's material point at x (thesis eq. 5.4).
-  Vec3<S> velocityAt(const Vec3<S>& x) const { return linearVelocity + angularVelocity.cross(x - centre); }
+  DRAPE_ALWAYS_INLINE Vec3<S> velocityAt(const Vec3<S>& x) const {
+    // Written out: in every contact record, where GCC would otherwise call Eigen's cross product out of line.
+    const Vec3<S> d = x - centre;
+    const Vec3<S>& w = angularVelocity;
+    return linearVelocity + Vec3<S>(w.y() * d.z() - w.z() * d.y(), w.z() * d.x() - w.x() * d.z(),
+                                    w.x() * d.y() - w.y() * d.x());
+  }
 };
 
 /// A solid ready for one substep: its distance field and motion in the cloth's scalar and local frame.
