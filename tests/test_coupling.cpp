@@ -25,6 +25,14 @@ template <class S> Eigen::Vector3d clothMomentum(const drape::Solver<S>& cloth) 
   return p;
 }
 
+/// A rigid world in empty space: no gravity, no ground.
+drape::RigidSettings emptySpace() {
+  drape::RigidSettings rigid;
+  rigid.gravity.setZero();
+  rigid.ground = false;
+  return rigid;
+}
+
 }  // namespace
 
 TEMPLATE_TEST_CASE("Newton's third law: a ball hitting a free cloth in empty space keeps the total momentum",
@@ -45,10 +53,7 @@ TEMPLATE_TEST_CASE("Newton's third law: a ball hitting a free cloth in empty spa
       settings.gravity.setZero();
       settings.contactForce = c.estimator;
       drape::Solver<S> cloth(squareCloth<S>(21, 0.02, 0.0), settings);
-      drape::RigidSettings rigid;
-      rigid.gravity.setZero();
-      rigid.ground = false;
-      drape::RigidWorld world(rigid);
+      drape::RigidWorld world(emptySpace());
       drape::BodyDesc ball;
       ball.shape = drape::Sphere{0.06};
       ball.pose.position = {0.01, 0.005, -0.15};  // off centre, so the push is not symmetric
@@ -89,10 +94,7 @@ TEMPLATE_TEST_CASE("normal contact forces pass through a ball's centre: a spinni
     settings.normalForceOnly = true;
     drape::Solver<S> cloth(squareCloth<S>(21, 0.02, 0.0), settings);
     for (drape::Index corner : {0, 20, 420, 440}) cloth.pin(corner);
-    drape::RigidSettings rigid;
-    rigid.gravity.setZero();
-    rigid.ground = false;
-    drape::RigidWorld world(rigid);
+    drape::RigidWorld world(emptySpace());
     drape::BodyDesc ball;
     ball.shape = drape::Sphere{0.05};
     ball.pose.position = {0.03, -0.02, 0.08};  // off centre and oblique: faces meet it on one side first

@@ -496,14 +496,7 @@ template <Scalar S, class... Shapes> class BasicSolver {
             break;
           case ContactForce::Impulse: {
             const S dvn = dv.dot(n);
-            // The overlap the projections could not resolve, on the slot's own plane or on an opposing one:
-            // a vertex pinched between this body and another surface ends up behind one of the two planes.
-            S unresolved = std::max(c.offset - n.dot(state_.x[i]), S(0));
-            for (int j = 0; j < count; ++j)
-              if (j != k)
-                unresolved += std::max(slots[j].offset - slots[j].normal.dot(state_.x[i]), S(0)) *
-                              std::max(-slots[j].normal.dot(n), S(0));
-            Vec3<S> impulse = (dvn + unresolved / h) * n;
+            Vec3<S> impulse = (dvn + unresolvedOverlap(i, k) / h) * n;
             if (oneBody) impulse += dv - dvn * n;  // the tangential (friction) change
             onBody = -(m / h) * impulse;
             break;
@@ -518,6 +511,20 @@ template <Scalar S, class... Shapes> class BasicSolver {
       bodyForce_[b] += pinch_[b].force / pinch_[b].count;
       bodyTorque_[b] += pinch_[b].torque / pinch_[b].count;
     }
+  }
+
+  /// The overlap the projections could not resolve for vertex i's slot k, on the slot's own plane or on an
+  /// opposing one (weighted by how squarely it opposes): a vertex pinched between slot k's body and another
+  /// surface ends up behind one of the two planes.
+  S unresolvedOverlap(Index i, int k) const {
+    const auto& slots = contacts_.slots[i];
+    const Vec3<S>& n = slots[k].normal;
+    S overlap = std::max(slots[k].offset - n.dot(state_.x[i]), S(0));
+    for (int j = 0; j < contacts_.slotCount[i]; ++j)
+      if (j != k)
+        overlap += std::max(slots[j].offset - slots[j].normal.dot(state_.x[i]), S(0)) *
+                   std::max(-slots[j].normal.dot(n), S(0));
+    return overlap;
   }
 
   /// A vertex held between slot k's body and a fixed (static or kinematic) solid facing it cannot pass on the
@@ -541,12 +548,8 @@ template <Scalar S, class... Shapes> class BasicSolver {
     const Eigen::Vector3d r = contactPoint(c, i, thickness);
     const Eigen::Vector3d centre = bodyCentre_[std::size_t(c.body)];
     const Eigen::Vector3d wall = slots[against].solidVelocity.template cast<double>();
-    S deficit = std::max(c.offset - c.normal.dot(state_.x[i]), S(0));
-    for (int j = 0; j < contacts_.slotCount[i]; ++j)
-      if (j != k)
-        deficit += std::max(slots[j].offset - slots[j].normal.dot(state_.x[i]), S(0)) *
-                   std::max(-slots[j].normal.dot(c.normal), S(0));
-    const double approach = (body.velocityAt(centre + r) - wall).dot(n) + kPinchRate * double(deficit) / double(h);
+    const double approach =
+        (body.velocityAt(centre + r) - wall).dot(n) + kPinchRate * double(unresolvedOverlap(i, k)) / double(h);
     const Eigen::Vector3d rn = r.cross(n);
     const double kn = body.inverseMass() + rn.dot(body.inverseInertiaWorld() * rn);
     Pinch& p = pinch_[std::size_t(c.body)];
