@@ -53,6 +53,9 @@ template <Scalar S> struct ContactBuffer {
   std::uint32_t current = 0;
   std::vector<std::array<ContactSlot<S>, kSlots>> slots;
   std::vector<std::uint8_t> slotCount;
+  /// == current when a surface of vertex i found every slot taken by other directions and joined the closest
+  /// (recordMore): its slots then misstate one surface, and the planes alone must not place the vertex.
+  std::vector<std::uint32_t> overflow;
   std::vector<S> normalDv;  ///< normal velocity change the response made (m/s), the source of propagation
   /// Per vertex and slot, the lines of a coupled body's contacts (ContactLine): sized by keepLines, written only
   /// by record<true>, read only for slots whose body is >= 0.
@@ -63,11 +66,13 @@ template <Scalar S> struct ContactBuffer {
     current = 0;
     slots.resize(n);
     slotCount.assign(n, 0);
+    overflow.assign(n, 0);
     normalDv.resize(n);
   }
   void begin() {
     if (++current == 0) {  // wrapped after 2^32 substeps: restart the stamps
       std::fill(stamp.begin(), stamp.end(), 0);
+      std::fill(overflow.begin(), overflow.end(), 0);
       current = 1;
     }
   }
@@ -136,6 +141,7 @@ template <Scalar S> struct ContactBuffer {
       return;
     }
     if (best < 0) {  // all slots taken by other directions: join the closest
+      overflow[i] = current;
       bestCos = -2;
       for (int k = 0; k < kSlots; ++k)
         if (own[k].normal.dot(n) > bestCos) best = k, bestCos = own[k].normal.dot(n);
@@ -368,7 +374,10 @@ void projectOntoContactPlanes(const ContactBuffer<S>& contacts, Vec3<S>* x, cons
   for (Index i = 0; i < n; ++i) {
     if (!contacts.live(i)) continue;
     const int count = contacts.slotCount[i];
-    if (count < 2) continue;
+    // A surface that joined another direction's slot is not in the planes: the corner they make may lie deep
+    // inside it (two faces of a box and a third body's face, with the floor joined to that face, meet far
+    // below the floor). Such a vertex is left to the passes on the true fields.
+    if (count < 2 || contacts.overflow[i] == contacts.current) continue;
     const auto& sl = contacts.slots[i];
     Vec3<S> normals[ContactBuffer<S>::kSlots];
     S offsets[ContactBuffer<S>::kSlots];
