@@ -78,14 +78,14 @@ TEMPLATE_TEST_CASE("Newton's third law: a ball hitting a free cloth in empty spa
 TEMPLATE_TEST_CASE("a light ball hitting a cloth at rest gains no energy from it", "[coupling]", float, double) {
   using S = TestType;
   // A 0.11 g ball at 2 m/s into a free cloth at rest, in empty space: the vertices it meets weigh more than it
-  // does. Each vertex's change was estimated as if the body could not move, so the body got the whole of their
+  // does. Each vertex's push was estimated as if the body could not move, so the body got the whole of their
   // momentum change and bounced back faster than it came: the total kinetic energy rose to 7.6x its start.
   // Shared as an inelastic collision of the two (BasicSolver::shareExchanges), the ball and the vertices move
   // on together and the energy only falls. Asserted for the impulse estimate, the one that passes on what the
   // contacts took from the vertices: the total kinetic energy never exceeds its start, and the momentum is kept
   // as in the Newton test. Reported for the others, which estimate a force from the vertices' other forces or
   // their work and so are not bounded by what the vertices had (measured: energy 1.4x, 2.5x before the sharing;
-  // sub-force 3.5x, 3.4x before).
+  // sub-force 3.4x, as before).
   for (const auto estimator : {drape::ContactForce::Impulse, drape::ContactForce::Energy, drape::ContactForce::SubForce}) {
     drape::Settings settings;
     settings.gravity.setZero();
@@ -313,7 +313,7 @@ TEST_CASE("Fig 6.5: a cloth launches a light ball; the three estimators' launch 
   // A 0.4 m cloth pinned along two opposite edges, made springy (stretch compliance 1e-3 m/N); a 20 g ball
   // falls 0.3 m onto it, and the cloth throws it back up. Reported: the top of its flight after the bounce.
   // Asserted: each estimator launches it, and none gives back more than the drop's energy. Measured: sub-force
-  // 0.349 m, energy 0.339 m, impulse 0.277 m (0.337, 0.351 and 0.278 before the exchanges were shared as
+  // 0.350 m, energy 0.341 m, impulse 0.277 m (0.337, 0.351 and 0.278 before the exchanges were shared as
   // inelastic collisions). The thesis found sub-force highest and energy lowest; here the energy estimate is
   // close to the sub-force one (the cloth is springy, so the work done on the particles along their
   // displacement is what throws the ball) and the impulse one, which passes on exactly the momentum the

@@ -506,12 +506,12 @@ template <Scalar S, class... Shapes> class BasicSolver {
           }
         }
         if (oneBody)
-          addExchange(c, i, onBody.template cast<double>(), thickness, i, m, dv);
+          addExchange(c, i, onBody.template cast<double>(), thickness, i, m);
         else
           addBodyForce(c, i, onBody.template cast<double>(), thickness);
       }
     }
-    shareExchanges(h);
+    shareExchanges();
     // Each pinch's support was sized to hold the body alone; a body on several shares it among them.
     for (std::size_t b = 0; b < pinch_.size(); ++b) {
       if (pinch_[b].count == 0) continue;
@@ -591,36 +591,35 @@ template <Scalar S, class... Shapes> class BasicSolver {
   void addBodyForce(const ContactSlot<S>& c, Index at, const Eigen::Vector3d& f, S thickness) {
     addWrench(c, at, f, thickness, bodyForce_[std::size_t(c.body)], bodyTorque_[std::size_t(c.body)]);
   }
-  /// addBodyForce for the change dv of a vertex (mass m) whose contacts are all with slot c's body: the force
-  /// joins the body's Exchange, and the vertex is listed as that body's (shareExchanges).
-  void addExchange(const ContactSlot<S>& c, Index at, const Eigen::Vector3d& f, S thickness, Index vertex, S m,
-                   const Vec3<S>& dv) {
+  /// addBodyForce for the push f of a vertex (mass m) whose contacts are all with slot c's body: it joins the
+  /// body's Exchange, and the vertex is listed as that body's (shareExchanges).
+  void addExchange(const ContactSlot<S>& c, Index at, const Eigen::Vector3d& f, S thickness, Index vertex, S m) {
     Exchange& e = exchange_[std::size_t(c.body)];
     addWrench(c, at, f, thickness, e.force, e.torque);
-    e.vertexEnergy += double(m) * double(dv.squaredNorm());
+    e.vertexSide += f.squaredNorm() / double(m);
     exchanged_.push_back({vertex, c.body});  // at most one per vertex: the capacity is the vertex count
   }
 
-  /// The estimates take each vertex's change as if the body could not move. Where the vertices pushing a light
-  /// body together carry more momentum than it can take, the body got all of their change and left faster than
-  /// they came, with energy from nowhere: a 1.3 g hull met by a dozen vertices spun up to 870 rad/s in one
-  /// substep. So each body's exchange with the vertices that touch only it is an inelastic collision of the two:
-  /// both sides take the share s = Q / (Q + J^T M^-1 J) of the estimate, where Q = sum m |dv|^2 over the
-  /// vertices and J = (F h, T h) is the estimated impulse on the body, M its mass matrix. For vertices of total
-  /// mass M_c that all changed alike, pushing along n at r, this is 1 / (1 + M_c k) with k = 1/m + (r x n)^T I^-1
-  /// (r x n): the impulse of two masses meeting, m_eff M_c / (m_eff + M_c) of the immovable body's M_c. A heavy
-  /// body (k M_c -> 0) keeps all of it. The vertices keep the rest of their approach, and meet the body again in
-  /// the next substep: momentum is exchanged exactly, only later. Without the scaled vertices' dv, a body's
-  /// force is what the estimate gave; pinches and contacts shared with another surface are not scaled.
-  void shareExchanges(S h) {
+  /// The estimates take each vertex's push as if the body could not move. Where the vertices pushing a light
+  /// body together outweigh it, the body got all of their momentum change and left faster than they came, with
+  /// energy from nowhere: a 1.3 g hull met by a dozen vertices spun up to 870 rad/s in one substep. So each
+  /// body's exchange with the vertices that touch only it is an inelastic collision of the two: each push f_i is
+  /// an impulse h f_i between the vertex's mass m_i and the body, and both sides take the share
+  /// s = Q / (Q + J^T M^-1 J) of it, with Q = sum h^2 |f_i|^2 / m_i, J = (F h, T h) the body's summed impulse and M
+  /// its mass matrix. For vertices of total mass M_c pushing alike along n at r, s = 1 / (1 + M_c k) with
+  /// k = 1/m + (r x n)^T I^-1 (r x n): the impulse of two masses meeting, m_eff M_c / (m_eff + M_c) against the
+  /// immovable body's M_c. A heavy body (k M_c -> 0) keeps all of it. The vertices keep the rest of their change
+  /// undone, so they meet the body again the next substep: with the impulse estimate, momentum is still
+  /// exchanged exactly, only later. Pinches, and vertices that also touch another surface, are not scaled.
+  void shareExchanges() {
     bool partial = false;
     for (std::size_t b = 0; b < exchange_.size(); ++b) {
       Exchange& e = exchange_[b];
       const CoupledBody& body = *bodies_[b];
-      const double hd = double(h);
-      const double bodyEnergy = hd * hd * (body.inverseMass() * e.force.squaredNorm() +
-                                           e.torque.dot(body.inverseInertiaWorld() * e.torque));
-      e.share = bodyEnergy > 0 ? e.vertexEnergy / (e.vertexEnergy + bodyEnergy) : 1.0;
+      // Both sides of Q / (Q + J^T M^-1 J) without their common factor h^2.
+      const double bodySide =
+          body.inverseMass() * e.force.squaredNorm() + e.torque.dot(body.inverseInertiaWorld() * e.torque);
+      e.share = bodySide > 0 ? e.vertexSide / (e.vertexSide + bodySide) : 1.0;
       bodyForce_[b] += e.share * e.force;
       bodyTorque_[b] += e.share * e.torque;
       partial = partial || e.share < 1;
@@ -660,7 +659,7 @@ template <Scalar S, class... Shapes> class BasicSolver {
       for (int k = 0; k < contacts_.slotCount[*j]; ++k) {
         if (slots[k].body < 0) continue;
         const S m = S(1) / state_.invMass[i];
-        addExchange(slots[k], *j, (-(m / h) * dv).template cast<double>(), thickness, i, m, dv);
+        addExchange(slots[k], *j, (-(m / h) * dv).template cast<double>(), thickness, i, m);
         return;
       }
     }
@@ -845,7 +844,7 @@ template <Scalar S, class... Shapes> class BasicSolver {
   /// A body's exchange with the vertices whose contacts are all with it, this substep (shareExchanges).
   struct Exchange {
     Eigen::Vector3d force = Eigen::Vector3d::Zero(), torque = Eigen::Vector3d::Zero();  ///< estimated, on the body
-    double vertexEnergy = 0;  ///< sum of m |dv|^2 over those vertices
+    double vertexSide = 0;    ///< sum of |f|^2 / m over those vertices' pushes f
     double share = 1;         ///< of the estimate both sides take
   };
   std::vector<Exchange> exchange_;
