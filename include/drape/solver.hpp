@@ -581,7 +581,9 @@ template <Scalar S, class... Shapes> class BasicSolver {
   /// law holds exactly), acting at contactPoint, added to (force, torque) about the body's centre.
   void addWrench(const ContactSlot<S>& c, Index at, Eigen::Vector3d f, S thickness, Eigen::Vector3d& force,
                  Eigen::Vector3d& torque) const {
-    if (settings_.normalForceOnly) {
+    // Without friction a contact can only push along its normal: what else the vertex's change holds (its
+    // slot's merged normals, propagation from neighbours facing other ways) is not the body's to take.
+    if (settings_.normalForceOnly || (c.staticFriction == S(0) && c.dynamicFriction == S(0))) {
       const Eigen::Vector3d n = c.normal.template cast<double>();
       f = f.dot(n) * n;
     }
