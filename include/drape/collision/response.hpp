@@ -257,22 +257,14 @@ void projectVertexContacts(const CompiledSolid<Shape, S>& solid, S thickness, Ve
 /// For every face: cull by bounding sphere (when kCull), find the deepest point by PGD, and if it is closer
 /// than `thickness`, move the face's vertices, weighted by barycentric weight and inverse mass
 /// (dx_i = w_i b_i / sum_j w_j b_j^2 * depth * n), so that point reaches the thickness. Visits the faces `ids`
-/// (count of them) in order on one substep and in reverse on the next. Returns the largest distance of a moved
-/// vertex from `binned`. Serial: neighbouring faces share vertices.
-///
-/// Why the direction alternates: faces share vertices, so each face's move changes where the next one starts,
-/// and a sweep always in index order leaves a bias along the cloth's index order. A ball dropped centred into a
-/// hammock with friction spun at 3 rad/s about the grid's row axis 0.1 s after landing, and with the grid turned
-/// the spin turned with it. Forward and backward sweeps in turn (symmetric Gauss-Seidel) cancel that bias to
-/// first order; the direction is the parity of the contact buffer's substep stamp, so a run stays deterministic.
+/// (count of them) in order. Returns the largest distance of a moved vertex from `binned`. Serial: neighbouring
+/// faces share vertices.
 template <bool kCull, bool kBody, class Shape, Scalar S, class Ids>
 S projectFaceContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, int pgdIterations,
                         const std::vector<std::array<Index, 3>>& triangles, Ids ids, Index count, Vec3<S>* x,
                         const S* invMass, ContactBuffer<S>& contacts, CollisionStats& stats, const Vec3<S>* binned) {
   S moved = 0;
-  const bool backward = (contacts.current & 1U) != 0;
-  for (Index visit = 0; visit < count; ++visit) {
-    const Index f = backward ? count - 1 - visit : visit;
+  for (Index f = 0; f < count; ++f) {
     const auto& t = triangles[std::size_t(ids[f])];
     FaceQuery<S> q;
     if (!queryFace<kCull>(solid.sdf, x[t[0]], x[t[1]], x[t[2]], thickness, pgdIterations, q)) {
