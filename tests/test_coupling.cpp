@@ -265,7 +265,7 @@ TEMPLATE_TEST_CASE("a very heavy body is not moved by the cloth, which slides of
   using S = TestType;
   // A 0.1 m ball of 4 t resting on the ground; the same ball as a static solid. A 0.3 m cloth falls on it off
   // centre and slides off.
-  auto run = [](bool coupled, double& bodyMoved, double& fastestLate) {
+  auto run = [](bool coupled, double& bodyMoved, double& fastestLate, double& rmsLate) {
     drape::Solver<S> cloth(squareCloth<S>(15, 0.02, 0.35));
     cloth.addSolid(drape::Solid<drape::Plane>{});
     drape::RigidWorld world;
@@ -283,42 +283,56 @@ TEMPLATE_TEST_CASE("a very heavy body is not moved by the cloth, which slides of
       cloth.addSolid(ball);
     }
     fastestLate = 0;
+    double squares = 0;
+    int samples = 0;
     for (int s = 0; s < 100; ++s) {
       if (coupled)
         drape::stepCoupled(cloth, world, 0.01);
       else
         cloth.step(0.01);
       if (s >= 80)
-        for (drape::Index i = 0; i < cloth.vertexCount(); ++i)
+        for (drape::Index i = 0; i < cloth.vertexCount(); ++i) {
           fastestLate = std::max(fastestLate, cloth.velocity(i).norm());
+          squares += cloth.velocity(i).squaredNorm();
+          ++samples;
+        }
     }
+    rmsLate = std::sqrt(squares / samples);
     bodyMoved = (world.body(b).pose().position - heavy.pose.position).norm();
     std::vector<Eigen::Vector3d> out;
     for (drape::Index i = 0; i < cloth.vertexCount(); ++i) out.push_back(cloth.position(i));
     return out;
   };
-  double moved = 0, fastestCoupled = 0, unused = 0, fastestFixed = 0;
-  const auto coupled = run(true, moved, fastestCoupled);
-  const auto fixed = run(false, unused, fastestFixed);
+  double moved = 0, fastestCoupled = 0, unused = 0, fastestFixed = 0, rmsCoupled = 0, rmsFixed = 0;
+  const auto coupled = run(true, moved, fastestCoupled, rmsCoupled);
+  const auto fixed = run(false, unused, fastestFixed, rmsFixed);
   double centreZ = 0, fixedZ = 0;
   for (const auto& p : coupled) centreZ += p.z() / double(coupled.size());
   for (const auto& p : fixed) fixedZ += p.z() / double(fixed.size());
   // The slide off is chaotic: the two runs end about a centimetre apart vertex by vertex, so they are compared
-  // on the body's motion, the cloth's height and its speed.
+  // on the body's motion, the cloth's height and its speed. In double the two runs' fastest vertices agree to
+  // 1e-3 m/s whatever the compiler's flags. In float they do not: the fastest vertex over the last 0.2 s came to
+  // 1.68 against 1.79 m/s (fixed) in the CMake build and 2.19 against 1.86 with -march=native (fused
+  // multiply-adds), and moving the ball by 1 cm moved either by 0.3 m/s, coupled or not. So in float the cloth's
+  // RMS speed over those 0.2 s is compared instead (0.61 against 0.59 m/s; 0.51 against 0.59 a centimetre over).
   INFO("the body moved " << moved << " m; cloth mean height " << centreZ << " m (fixed ball: " << fixedZ
                          << "); fastest vertex over the last "
                          << "0.2 s " << fastestCoupled << " m/s (fixed ball: " << fastestFixed
-                         << ")");
+                         << "), RMS " << rmsCoupled << " m/s (fixed ball: " << rmsFixed << ")");
   CHECK(moved <= 1e-5);
   CHECK(std::abs(centreZ - fixedZ) <= 5e-3);
   CHECK(centreZ <= 0.1);  // slid off the ball's top (0.2 m) toward the floor
-  CHECK(fastestCoupled <= fastestFixed + 0.05);
+  if constexpr (std::is_same_v<S, double>)
+    CHECK(fastestCoupled <= fastestFixed + 0.05);
+  CHECK(rmsCoupled <= 1.1 * rmsFixed);  // no trembling from the coupling: a tremble shows in every sample
 }
 
 TEST_CASE("Fig 6.5: a cloth launches a light ball; the three estimators' launch heights", "[coupling]") {
   // A 0.4 m cloth pinned along two opposite edges, made springy (stretch compliance 1e-3 m/N); a 20 g ball
   // falls 0.3 m onto it, and the cloth throws it back up. Reported: the top of its flight after the bounce.
-  // Asserted: each estimator launches it, and none gives back more than the drop's energy. Measured: sub-force
+  // Asserted: the cloth, not the ground, stops each fall; each estimator throws the ball back up at least a third
+  // of the drop; none gives back more than the drop's energy. (Checking only that the ball rose again let
+  // through a ball that went through the cloth and came to rest on the ground.) Measured: sub-force
   // 0.350 m, energy 0.341 m, impulse 0.277 m (0.337, 0.351 and 0.278 before the exchanges were shared as
   // inelastic collisions). The thesis found sub-force highest and energy lowest; here the energy estimate is
   // close to the sub-force one (the cloth is springy, so the work done on the particles along their
@@ -354,7 +368,9 @@ TEST_CASE("Fig 6.5: a cloth launches a light ball; the three estimators' launch 
     const double launch = top - lowest;
     WARN(drape::toString(estimator) << ": the ball dropped " << drop << " m, fell to " << lowest << " m and was thrown "
                                     << launch << " m up (to " << top << " m)");
+    CHECK(lowest > 0.2 - 0.1);  // the cloth at 0.2 m held it (the ground would stop its centre at 0.03 m)
     CHECK(rising);
+    CHECK(launch > drop / 3);
     CHECK(top <= start + 1e-3);  // no more energy out than in
   }
 }
