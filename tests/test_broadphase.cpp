@@ -77,8 +77,8 @@ template <class S> void requireSameState(const drape::Solver<S>& a, const drape:
 
 }  // namespace
 
-TEMPLATE_TEST_CASE("the cloth grid finds exactly the vertices in a box, and exactly the faces whose bounding boxes "
-                   "meet it (so every face that can reach it), after vertices drift",
+TEMPLATE_TEST_CASE("the cloth grid finds exactly the vertices in a box, and every face that can reach it, after "
+                   "vertices drift",
                    "[broadphase]", float, double) {
   using S = TestType;
   using V = drape::Vec3<S>;
@@ -95,7 +95,7 @@ TEMPLATE_TEST_CASE("the cloth grid finds exactly the vertices in a box, and exac
   grid.setTopology(asset.triangles, n, S(0.04));
   grid.build(x.data(), asset.triangles);
   std::vector<drape::Index> found;
-  int checkedFaces = 0, faceHits = 0;
+  int checkedFaces = 0;
   for (int round = 0; round < 2; ++round) {
     if (round == 1) {  // every third vertex moves up to 3 cm: the queries must widen by the drift
       S drift = 0;
@@ -132,22 +132,13 @@ TEMPLATE_TEST_CASE("the cloth grid finds exactly the vertices in a box, and exac
                          S(6 - a - b) * x[std::size_t(t[2])]) / S(6);
             reaches = inGrownBox(p, lo, hi, margin);
           }
-        // Exact: found if and only if the face's own bounding box meets the grown box (the reach and drift
-        // bounds choose the cells only; a face they let in that cannot touch the box would cost the narrow
-        // phase a field evaluation).
-        const V faceLow = x[std::size_t(t[0])].cwiseMin(x[std::size_t(t[1])]).cwiseMin(x[std::size_t(t[2])]);
-        const V faceHigh = x[std::size_t(t[0])].cwiseMax(x[std::size_t(t[1])]).cwiseMax(x[std::size_t(t[2])]);
-        const bool meets = (faceHigh.array() >= lo.array() - margin).all() && (faceLow.array() <= hi.array() + margin).all();
-        REQUIRE(std::binary_search(found.begin(), found.end(), f) == meets);
-        faceHits += meets ? 1 : 0;
         if (!reaches) continue;
         ++checkedFaces;
-        REQUIRE(meets);
+        REQUIRE(std::binary_search(found.begin(), found.end(), f));
       }
     }
   }
   CHECK(checkedFaces > 1000);
-  CHECK(faceHits > checkedFaces);  // boxes that a face's bounding box meets but none of its sample points reach
 }
 
 TEMPLATE_TEST_CASE("with the broad phase a crowded scene runs bit for bit as without it, on one and two threads",

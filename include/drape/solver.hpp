@@ -699,9 +699,9 @@ template <Scalar S, class... Shapes> class BasicSolver {
             moveBound_ = 0;
             if constexpr (kFacePass) {
               grid_.faces(x, solid.boxLow, solid.boxHigh, thickness, nearFaces_);
-              grid_.noteDrift(projectFaceContacts<kCull>(solid, thickness, settings_.pgdIterations, asset_->triangles,
-                                                         ItemList{nearFaces_.data()}, Index(nearFaces_.size()), x, w,
-                                                         contacts_, stats_, grid_.binned()));
+              grid_.noteDrift(projectFaceContacts<kCull, true>(
+                  solid, thickness, settings_.pgdIterations, asset_->triangles, ItemList{nearFaces_.data()},
+                  Index(nearFaces_.size()), x, w, contacts_, stats_, grid_.binned()));
             }
           }
         } else {

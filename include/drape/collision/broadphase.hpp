@@ -37,7 +37,6 @@ template <Scalar S> class ClothGrid {
     for (const auto& t : triangles) ++ownedStart_[std::size_t(t[0]) + 1];
     for (Index i = 0; i < vertexCount; ++i) ownedStart_[i + 1] += ownedStart_[i];
     owned_.resize(triangles.size());
-    triangles_ = triangles;
     std::vector<Index> fill(ownedStart_.begin(), ownedStart_.end() - 1);
     for (Index f = 0; f < Index(triangles.size()); ++f) owned_[std::size_t(fill[triangles[f][0]]++)] = f;
     cellOf_.resize(std::size_t(vertexCount));
@@ -107,11 +106,8 @@ template <Scalar S> class ClothGrid {
     });
   }
 
-  /// The faces whose bounding box, at the current positions, meets [low, high] grown by margin, in ascending
-  /// order. The cells give each vertex whose faces may reach the box; each face it owns is then checked on its
-  /// own corners, so the list is exact (the reach and drift bounds only choose the cells; the faces near a body
-  /// that the bounds let in but that cannot touch its box would each cost the narrow phase a field evaluation).
-  /// The faces are marked in a bit set, then read out word by word over the span of face indices marked (faces
+  /// The faces that may have a point in [low, high] grown by margin, in ascending order. They are marked in a
+  /// bit set as the cells give them, then read out word by word over the span of face indices marked (faces
   /// near one body are a few rows of the cloth: a few words), which costs less than sorting them.
   void faces(const Vec3<S>* x, const Vec3<S>& low, const Vec3<S>& high, S margin, std::vector<Index>& out) {
     out.clear();
@@ -119,17 +115,12 @@ template <Scalar S> class ClothGrid {
     // moved at most drift since the reach was measured).
     const S grow = margin + S(2) * drift_;
     const S most = grow + maxReach_;
-    const Vec3<S> lo = low.array() - margin, hi = high.array() + margin;
     std::size_t first = faceBits_.size(), last = 0;
     visit(low.array() - most - drift_, high.array() + most + drift_, [&](Index i) {
       const S g = grow + reach_[std::size_t(i)];
       if (!((x[i].array() >= low.array() - g).all() && (x[i].array() <= high.array() + g).all())) return;
       for (Index k = ownedStart_[std::size_t(i)]; k < ownedStart_[std::size_t(i) + 1]; ++k) {
         const auto f = std::size_t(owned_[std::size_t(k)]);
-        const auto& t = triangles_[f];
-        const Vec3<S> faceLow = x[t[0]].cwiseMin(x[t[1]]).cwiseMin(x[t[2]]);
-        const Vec3<S> faceHigh = x[t[0]].cwiseMax(x[t[1]]).cwiseMax(x[t[2]]);
-        if (!((faceHigh.array() >= lo.array()).all() && (faceLow.array() <= hi.array()).all())) continue;
         faceBits_[f / 64] |= std::uint64_t(1) << (f % 64);
         first = std::min(first, f / 64);
         last = std::max(last, f / 64);
@@ -179,7 +170,6 @@ template <Scalar S> class ClothGrid {
   std::vector<Vec3<S>> binned_;  ///< positions at the build
   std::vector<S> reach_;         ///< farthest vertex of the faces each vertex owns, at the build
   std::vector<Index> ownedStart_, owned_;  ///< faces owned by each vertex (CSR)
-  std::vector<std::array<Index, 3>> triangles_;
   std::vector<Index> cellStart_, fill_, items_;
   std::vector<std::int32_t> cellOf_;
   std::vector<std::uint64_t> faceBits_;  ///< scratch of faces(): a bit per face, all clear between queries

@@ -172,7 +172,7 @@ template <Scalar S> struct ContactBuffer {
 /// Counters of the last substep's collision work, for tests and benches.
 struct CollisionStats {
   std::int64_t facesTested = 0;   ///< face-solid pairs considered
-  std::int64_t facesCulled = 0;   ///< of those, rejected by the bounding sphere
+  std::int64_t facesCulled = 0;   ///< of those, rejected by their bounding boxes or spheres
   std::int64_t faceContacts = 0;  ///< face-solid pairs whose deepest point was within the thickness
   std::int64_t vertexContacts = 0;
   std::int64_t sdfEvaluations = 0;
@@ -259,13 +259,31 @@ void projectVertexContacts(const CompiledSolid<Shape, S>& solid, S thickness, Ve
 /// (dx_i = w_i b_i / sum_j w_j b_j^2 * depth * n), so that point reaches the thickness. Visits the faces `ids`
 /// (count of them) in order. Returns the largest distance of a moved vertex from `binned`. Serial: neighbouring
 /// faces share vertices.
-template <bool kCull, bool kBody, class Shape, Scalar S, class Ids>
+///
+/// With kBoxed and kCull (a bounded solid, given the faces the broad phase found near it), a face whose bounding
+/// box misses the solid's box grown by the thickness is passed over before any field evaluation: outside its box
+/// a solid's field is at least the distance to the box (placeBounds), so no point of such a face is within the
+/// thickness.
+/// The box is read when the face's turn comes, on the positions as the faces before it left them, so the
+/// contacts are bit for bit those of the pass without the check. Such faces count as culled. In the 80-body
+/// rain the grid hands on 125 faces per body and substep, and 115 of them were culled by a field evaluation each.
+template <bool kCull, bool kBody, bool kBoxed, class Shape, Scalar S, class Ids>
 S projectFaceContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, int pgdIterations,
                         const std::vector<std::array<Index, 3>>& triangles, Ids ids, Index count, Vec3<S>* x,
                         const S* invMass, ContactBuffer<S>& contacts, CollisionStats& stats, const Vec3<S>* binned) {
   S moved = 0;
+  [[maybe_unused]] const Vec3<S> boxLow = solid.boxLow.array() - thickness;
+  [[maybe_unused]] const Vec3<S> boxHigh = solid.boxHigh.array() + thickness;
   for (Index f = 0; f < count; ++f) {
     const auto& t = triangles[std::size_t(ids[f])];
+    if constexpr (kBoxed && kCull) {
+      const Vec3<S> faceLow = x[t[0]].cwiseMin(x[t[1]]).cwiseMin(x[t[2]]);
+      const Vec3<S> faceHigh = x[t[0]].cwiseMax(x[t[1]]).cwiseMax(x[t[2]]);
+      if (!((faceHigh.array() >= boxLow.array()).all() && (faceLow.array() <= boxHigh.array()).all())) {
+        ++stats.facesCulled;
+        continue;
+      }
+    }
     FaceQuery<S> q;
     if (!queryFace<kCull>(solid.sdf, x[t[0]], x[t[1]], x[t[2]], thickness, pgdIterations, q)) {
       ++stats.facesCulled;
@@ -292,15 +310,15 @@ S projectFaceContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, int p
   stats.facesTested += count;
   return std::sqrt(moved);
 }
-template <bool kCull, class Shape, Scalar S, class Ids>
+template <bool kCull, bool kBoxed = false, class Shape, Scalar S, class Ids>
 S projectFaceContacts(const CompiledSolid<Shape, S>& solid, S thickness, int pgdIterations,
                       const std::vector<std::array<Index, 3>>& triangles, Ids ids, Index count, Vec3<S>* x,
                       const S* invMass, ContactBuffer<S>& contacts, CollisionStats& stats, const Vec3<S>* binned) {
   if (solid.motion.body >= 0)
-    return projectFaceContactsAs<kCull, true>(solid, thickness, pgdIterations, triangles, ids, count, x, invMass,
-                                              contacts, stats, binned);
-  return projectFaceContactsAs<kCull, false>(solid, thickness, pgdIterations, triangles, ids, count, x, invMass,
-                                             contacts, stats, binned);
+    return projectFaceContactsAs<kCull, true, kBoxed>(solid, thickness, pgdIterations, triangles, ids, count, x,
+                                                      invMass, contacts, stats, binned);
+  return projectFaceContactsAs<kCull, false, kBoxed>(solid, thickness, pgdIterations, triangles, ids, count, x,
+                                                     invMass, contacts, stats, binned);
 }
 
 inline constexpr int kLeastSquaresSteps = 16;  ///< Jacobi steps for a point pinched between surfaces
