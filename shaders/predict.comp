@@ -1,0 +1,26 @@
+// DESIGN 1, step 1 (the CPU twin: predictPositions in include/drape/cloth/integrate.hpp): a free vertex (inverse
+// mass w != 0) gains h g of velocity and moves h v; a pinned one stays. The prediction goes to the predicted
+// positions (for the velocity update) and, with the inverse mass in w, to the packed positions the solve
+// works on. `precise` keeps every product and sum rounded on its own, as the CPU kernel rounds them.
+layout(local_size_x = DRAPE_WORKGROUP) in;
+layout(std430, binding = DRAPE_B_POSITIONS) readonly buffer Positions { vec4 x[]; };
+layout(std430, binding = DRAPE_B_VELOCITIES) buffer Velocities { vec4 v[]; };
+layout(std430, binding = DRAPE_B_PREDICTED) writeonly buffer Predicted { vec4 xp[]; };
+layout(std430, binding = DRAPE_B_PACKED) writeonly buffer Packed { vec4 xw[]; };
+layout(location = DRAPE_U_COUNT) uniform uint count;
+layout(location = DRAPE_U_STEP) uniform float h;
+layout(location = DRAPE_U_GRAVITY_STEP) uniform vec3 gh;
+
+void main() {
+  const uint i = gl_GlobalInvocationID.x;
+  if (i >= count) return;
+  const vec4 xi = x[i];
+  precise vec3 p = xi.xyz;
+  if (xi.w != 0.0) {
+    precise const vec3 vi = v[i].xyz + gh;
+    v[i] = vec4(vi, 0.0);
+    p = p + h * vi;
+  }
+  xp[i] = vec4(p, 0.0);
+  xw[i] = vec4(p, xi.w);
+}
