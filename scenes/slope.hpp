@@ -58,7 +58,14 @@ inline Eigen::Quaterniond slopeRotation(double angleDeg) {
 /// Down the slope, in world coordinates.
 inline Eigen::Vector3d downhill(double angleDeg) { return slopeRotation(angleDeg) * Eigen::Vector3d(0, -1, 0); }
 
-template <Scalar S> Solver<S> makeSlope(const SlopeConfig& c) {
+/// What a slope scene is made of, for any solver: the cloth, its settings and the slope.
+template <Scalar S> struct SlopeParts {
+  std::shared_ptr<const ClothAsset<S>> asset;
+  Settings settings;
+  Solid<Plane> slope;
+};
+
+template <Scalar S> SlopeParts<S> slopeParts(const SlopeConfig& c) {
   detail::requireRange(c.angleDeg, 0, 80, "angle");
   detail::require(c.frames >= 1, "frames must be >= 1");
   detail::require(c.nx >= 2 && c.ny >= 2, "nx and ny must be >= 2");
@@ -70,16 +77,21 @@ template <Scalar S> Solver<S> makeSlope(const SlopeConfig& c) {
   grid.spacing = c.spacing;
   const double halfY = 0.5 * (c.ny - 1) * c.spacing;
   grid.placement.position = Eigen::Vector3d(0, 0, halfY * std::tan(theta) + c.gap);
-  auto asset = std::make_shared<const ClothAsset<S>>(ClothAsset<S>::grid(grid));
-  Settings s = c.base;
-  s.subStepCount = c.subSteps;
-  s.iterationCount = c.iterations;
-  s.collisionMethod = c.method;
-  Solver<S> solver(asset, s, c.areaDensity);
-  Solid<Plane> slope;
-  slope.pose.rotation = slopeRotation(c.angleDeg);
-  slope.staticFriction = slope.dynamicFriction = c.friction;
-  solver.addSolid(slope);
+  SlopeParts<S> parts;
+  parts.asset = std::make_shared<const ClothAsset<S>>(ClothAsset<S>::grid(grid));
+  parts.settings = c.base;
+  parts.settings.subStepCount = c.subSteps;
+  parts.settings.iterationCount = c.iterations;
+  parts.settings.collisionMethod = c.method;
+  parts.slope.pose.rotation = slopeRotation(c.angleDeg);
+  parts.slope.staticFriction = parts.slope.dynamicFriction = c.friction;
+  return parts;
+}
+
+template <Scalar S> Solver<S> makeSlope(const SlopeConfig& c) {
+  const SlopeParts<S> parts = slopeParts<S>(c);
+  Solver<S> solver(parts.asset, parts.settings, c.areaDensity);
+  solver.addSolid(parts.slope);
   return solver;
 }
 
@@ -95,8 +107,8 @@ inline void writeObj(const std::string& path, const std::vector<Eigen::Vector3d>
   for (const auto& t : triangles) out << "f " << t[0] + 1 << ' ' << t[1] + 1 << ' ' << t[2] + 1 << '\n';
 }
 
-template <Scalar S> SlopeResult runSlope(const SlopeConfig& c) {
-  Solver<S> solver = makeSlope<S>(c);
+/// Runs the scene on `solver` (made from slopeParts(c), on the CPU or the GPU) and measures it.
+template <class SolverT> SlopeResult runSlopeOn(SolverT& solver, const SlopeConfig& c) {
   const Index n = solver.vertexCount();
   const double theta = c.angleDeg * std::numbers::pi / 180.0;
   const double g = c.base.gravity.norm();
@@ -125,7 +137,7 @@ template <Scalar S> SlopeResult runSlope(const SlopeConfig& c) {
   }
   meter.frame(solver, c.dt, false);
   double observerMs = 0;  // penetration measured inside step() is not the solver's time
-  auto onSubStep = [&](const Solver<S>& s) {
+  auto onSubStep = [&](const SolverT& s) {
     const auto t0 = std::chrono::steady_clock::now();
     if (c.penetrationEverySubstep) {
       const auto p = penetration(s);
@@ -195,6 +207,11 @@ template <Scalar S> SlopeResult runSlope(const SlopeConfig& c) {
   r.meanStrain = strain.mean;
   r.maxStrain = strain.max;
   return r;
+}
+
+template <Scalar S> SlopeResult runSlope(const SlopeConfig& c) {
+  Solver<S> solver = makeSlope<S>(c);
+  return runSlopeOn(solver, c);
 }
 
 }  // namespace drape::scenes

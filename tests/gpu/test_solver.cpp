@@ -1,6 +1,7 @@
 // The GPU solver against the CPU solver (issue 5): the same hanging cloth, stepped on both, compared vertex by
 // vertex over 1 to 10 substeps and on its invariants over seconds; and two GPU runs, bit for bit.
 #include "gpu_helpers.hpp"
+#include "slope.hpp"
 
 #include <drape/drape.hpp>
 
@@ -188,4 +189,80 @@ TEST_CASE("EGL and OSMesa contexts give the same bits", "[gpu]") {
   egl.reset();
   os.reset();
   drape::test::gpuContext().makeCurrent();
+}
+
+// --- against a plane: the inclined-plane scene of paper 002 (scenes/slope.hpp) ---------------------------------
+
+namespace {
+
+drape::gpu::Solver makeGpuSlope(const drape::scenes::SlopeConfig& c) {
+  const auto parts = drape::scenes::slopeParts<float>(c);
+  drape::gpu::Solver gpu(drape::test::gpuContext(), parts.asset, parts.settings, c.areaDensity);
+  gpu.addSolid(parts.slope);
+  return gpu;
+}
+
+}  // namespace
+
+TEST_CASE("on the slope the GPU solver follows the CPU solver over 1 to 10 substeps", "[gpu]") {
+  drape::scenes::SlopeConfig c;
+  c.nx = 24;
+  c.ny = 30;
+  c.gap = 0.001;  // the uphill rows start inside the thickness: contacts from the first substep
+  c.friction = GENERATE(0.0, 0.3, 1.0);  // sliding, slowed, stuck (tan 30 deg = 0.58)
+  c.method = GENERATE(drape::CollisionMethod::Improved, drape::CollisionMethod::Vertex);
+  INFO("friction " << c.friction << ", " << drape::toString(c.method));
+  for (int substeps : {1, 3, 10}) {
+    INFO(substeps << " substeps");
+    c.subSteps = substeps;
+    drape::Solver<float> cpu = drape::scenes::makeSlope<float>(c);
+    drape::gpu::Solver gpu = makeGpuSlope(c);
+    // Two steps: contacts in every substep of the second.
+    for (int step = 0; step < 2; ++step) {
+      cpu.step(c.dt);
+      gpu.step(c.dt);
+    }
+    REQUIRE(cpu.contacts().liveVertices().size() >= 10);  // part of the uphill row touches in the last substep
+    CHECK(largestGap(cpu, gpu) <= 1e-5);
+    double speedGap = 0;
+    for (Index i = 0; i < cpu.vertexCount(); ++i)
+      speedGap = std::max(speedGap, (cpu.velocity(i) - gpu.velocity(i)).norm());
+    CHECK(speedGap <= 1e-5 / (c.dt / substeps));
+  }
+}
+
+TEST_CASE("sliding down the slope, the GPU solver's cloth has the CPU's trembling, acceleration and penetration",
+          "[gpu]") {
+  drape::scenes::SlopeConfig c;  // the sample's scene: 50 x 80, 30 degrees, 10 substeps
+  c.frames = 150;                // 2.5 s: it lands at about 0.3 s and slides for the rest
+  c.friction = GENERATE(0.0, 0.3);
+  INFO("friction " << c.friction);
+  drape::Solver<float> cpu = drape::scenes::makeSlope<float>(c);
+  drape::gpu::Solver gpu = makeGpuSlope(c);
+  const auto a = drape::scenes::runSlopeOn(cpu, c), b = drape::scenes::runSlopeOn(gpu, c);
+  INFO("CPU: acceleration " << a.acceleration << " m/s^2 (analytic " << a.analyticAcceleration << "), trembling rms "
+                            << a.tremblingRms << " m/s, penetration " << a.maxPenetration << " m");
+  INFO("GPU: acceleration " << b.acceleration << " m/s^2, trembling rms " << b.tremblingRms << " m/s, penetration "
+                            << b.maxPenetration << " m");
+  REQUIRE(b.finite);
+  REQUIRE(a.acceleration > 0.5 * a.analyticAcceleration);  // it does slide
+  CHECK(std::abs(b.acceleration - a.acceleration) <= 0.01 * a.analyticAcceleration);
+  CHECK(b.tremblingRms <= 1.1 * a.tremblingRms + 1e-4);
+  CHECK(b.maxPenetration <= a.maxPenetration + 1e-4);
+  CHECK(b.maxStrain <= a.maxStrain + 1e-3);
+}
+
+TEST_CASE("the GPU solver names what it does not run yet", "[gpu]") {
+  const auto parts = drape::scenes::slopeParts<float>(drape::scenes::SlopeConfig{});
+  drape::Settings baseline = parts.settings;
+  baseline.collisionMethod = drape::CollisionMethod::Baseline;
+  CHECK_THROWS_WITH(drape::gpu::Solver(drape::test::gpuContext(), parts.asset, baseline), Catch::Contains("baseline"));
+  drape::gpu::Solver gpu(drape::test::gpuContext(), parts.asset, parts.settings);
+  drape::Solid<drape::Plane> repelling = parts.slope;
+  repelling.repulsion.radius = 0.01;
+  CHECK_THROWS_WITH(gpu.addSolid(repelling), Catch::Contains("repulsion"));
+  gpu.addSolid(parts.slope);
+  CHECK_THROWS_WITH(gpu.addSolid(parts.slope), Catch::Contains("one solid"));
+  CHECK_THROWS_WITH(gpu.setSettings(baseline), Catch::Contains("baseline"));
+  CHECK(gpu.settings().collisionMethod == drape::CollisionMethod::Improved);
 }

@@ -23,6 +23,12 @@ enum Binding : unsigned {
   kPacked = 3,       ///< vec4 per vertex: the positions the solve works on, w = inverse mass
   kConstraints = 4,  ///< Constraint per distance constraint, colour by colour
   kLambdas = 5,      ///< float per distance constraint: the XPBD multipliers of the current substep
+  kStart = 6,        ///< vec4 per vertex: the position at the start of the substep (friction reads it)
+  kContacts = 7,     ///< Contact per vertex: this substep's contact with the solid
+  kNeighbourOffsets = 8,  ///< uint per vertex + 1: where each vertex's neighbours start in kNeighbours
+  kNeighbours = 9,        ///< uint: the neighbours of every vertex (the asset's vertexNeighbours, in order)
+  kPropagation = 10,      ///< Ring per vertex: what a propagation ring passed to the vertex
+  kReduction = 11,        ///< vec4: a reduction's result (the centre of the positions)
 };
 
 /// Uniform locations (set per dispatch with glProgramUniform*).
@@ -34,7 +40,21 @@ enum Uniform : int {
   kAlphaTilde = 4,    ///< float: compliance / h^2
   kUseLambda = 5,     ///< uint: 1 to accumulate multipliers (several passes of a compliant set), else 0
   kInverseStep = 6,   ///< float: 1 / h
+  kThickness = 7,     ///< float: the cloth's thickness (m)
+  kShape = 8,         ///< vec4: the solid's field (a plane: outward normal, offset)
+  kSolidCentre = 9,   ///< vec3: the solid's frame origin (m, the cloth's local frame)
+  kSolidLinear = 10,  ///< vec3: its linear velocity (m/s)
+  kSolidAngular = 11, ///< vec3: its angular velocity (rad/s)
+  kNormalDamping = 12,  ///< float: Settings::normalDamping
+  kFriction = 13,     ///< vec2: the solid's static and dynamic Coulomb coefficients
+  kRing = 14,         ///< uint: the propagation ring of this dispatch, from 1
+  kWeight = 15,       ///< float: Settings::propagationWeight
+  kKeepStart = 16,    ///< uint: 1 to keep the start positions (a scene with friction), else 0
+  kShift = 17,        ///< vec3: how far the local origin moves (m)
 };
+
+/// Shape codes for DRAPE_SHAPE, the shape a collision kernel is compiled for.
+enum ShapeCode : int { kPlane = 1 };
 
 /// One distance constraint: |x_a - x_b| = rest.
 struct Constraint {
@@ -45,6 +65,28 @@ struct Constraint {
 static_assert(sizeof(Constraint) == 16 && alignof(Constraint) == 4);
 static_assert(offsetof(Constraint, a) == 0 && offsetof(Constraint, b) == 4 && offsetof(Constraint, rest) == 8);
 
+/// A vertex's contact of the substep: normal and correction (m) in `normal`, the solid's velocity at the
+/// contact in `solidVelocity` with w = 1 where there is a contact (0: none), and the normal velocity change
+/// the response made in normalDv.x (m/s), which propagation spreads.
+struct Contact {
+  float normal[4];
+  float solidVelocity[4];
+  float normalDv[4];
+};
+static_assert(sizeof(Contact) == 48 && offsetof(Contact, solidVelocity) == 16 && offsetof(Contact, normalDv) == 32);
+
+/// What propagation ring `reached` passed to a vertex: the share it offers the next ring (amount, m/s), along
+/// the mean normal of its sources, relative to their mean solid velocity. reached is 0 before any ring.
+struct Ring {
+  float normal[4];
+  float velocity[4];
+  float amount;
+  std::uint32_t reached;
+  std::uint32_t pad[2];
+};
+static_assert(sizeof(Ring) == 48 && offsetof(Ring, velocity) == 16 && offsetof(Ring, amount) == 32 &&
+              offsetof(Ring, reached) == 36);
+
 /// The per-vertex element: four floats, 16 bytes, as std430 lays out a vec4 array.
 struct Vertex {
   float x, y, z, w;
@@ -52,9 +94,10 @@ struct Vertex {
 static_assert(sizeof(Vertex) == 16 && offsetof(Vertex, w) == 12);
 
 /// The text every kernel is compiled after: the GLSL version, the constants above as #defines, and the structs.
-inline std::string preamble() {
+/// `defines` (e.g. "#define DRAPE_FRICTION 0\\n") go after the version line, before the defaults.
+inline std::string preamble(const std::string& defines = {}) {
   auto define = [](const char* name, long value) { return "#define " + std::string(name) + " " + std::to_string(value) + "\n"; };
-  std::string s = "#version 430 core\n";
+  std::string s = "#version 430 core\n" + defines;
   s += define("DRAPE_WORKGROUP", kWorkgroup);
   s += define("DRAPE_B_POSITIONS", kPositions);
   s += define("DRAPE_B_VELOCITIES", kVelocities);
@@ -69,8 +112,30 @@ inline std::string preamble() {
   s += define("DRAPE_U_ALPHA_TILDE", kAlphaTilde);
   s += define("DRAPE_U_USE_LAMBDA", kUseLambda);
   s += define("DRAPE_U_INVERSE_STEP", kInverseStep);
+  s += define("DRAPE_B_START", kStart);
+  s += define("DRAPE_B_CONTACTS", kContacts);
+  s += define("DRAPE_B_NEIGHBOUR_OFFSETS", kNeighbourOffsets);
+  s += define("DRAPE_B_NEIGHBOURS", kNeighbours);
+  s += define("DRAPE_B_PROPAGATION", kPropagation);
+  s += define("DRAPE_U_THICKNESS", kThickness);
+  s += define("DRAPE_U_SHAPE", kShape);
+  s += define("DRAPE_U_SOLID_CENTRE", kSolidCentre);
+  s += define("DRAPE_U_SOLID_LINEAR", kSolidLinear);
+  s += define("DRAPE_U_SOLID_ANGULAR", kSolidAngular);
+  s += define("DRAPE_U_NORMAL_DAMPING", kNormalDamping);
+  s += define("DRAPE_U_FRICTION", kFriction);
+  s += define("DRAPE_U_RING", kRing);
+  s += define("DRAPE_U_WEIGHT", kWeight);
+  s += define("DRAPE_U_KEEP_START", kKeepStart);
+  s += define("DRAPE_B_REDUCTION", kReduction);
+  s += define("DRAPE_U_SHIFT", kShift);
+  s += define("DRAPE_SHAPE_PLANE", kPlane);
+  // A kernel compiled without a choice gets the plane and friction (so every kernel compiles on its own).
+  s += "#ifndef DRAPE_SHAPE\n#define DRAPE_SHAPE DRAPE_SHAPE_PLANE\n#endif\n";
+  s += "#ifndef DRAPE_FRICTION\n#define DRAPE_FRICTION 1\n#endif\n";
   s += "struct Constraint { uint a; uint b; float rest; uint pad; };\n";
-  s += "#line 1\n";
+  s += "struct Contact { vec4 normal; vec4 solidVelocity; vec4 normalDv; };\n";
+  s += "struct Ring { vec4 normal; vec4 velocity; float amount; uint reached; uint pad0; uint pad1; };\n";
   return s;
 }
 

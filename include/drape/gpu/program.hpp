@@ -3,6 +3,7 @@
 
 #include <drape/gpu/context.hpp>
 #include <drape/gpu/layout.hpp>
+#include <drape/gpu/shader_sources.hpp>
 
 #include <algorithm>
 #include <cstddef>
@@ -13,13 +14,15 @@
 
 namespace drape::gpu {
 
-/// A compute program: layout::preamble() followed by the kernel's source. Throws drape::Error with the
-/// compiler's or linker's log, naming the kernel, if it does not build.
+/// A compute program: layout::preamble(defines), shaders/common.glsl, then the kernel's source (its line
+/// numbers in the compiler's messages are the file's). Throws drape::Error with the compiler's or linker's log,
+/// naming the kernel, if it does not build.
 class Program {
  public:
   Program() = default;
-  Program(std::string_view name, std::string_view source) : name_(name) {
-    const std::string text = layout::preamble() + std::string(source);
+  Program(std::string_view name, std::string_view source, const std::string& defines = {}) : name_(name) {
+    const std::string text = layout::preamble(defines) + "#line 1 1\n" + std::string(shaders::common_glsl) +
+                             "\n#line 1 0\n" + std::string(source);
     const char* ptr = text.c_str();
     const GLuint shader = glCreateShader(GL_COMPUTE_SHADER);
     glShaderSource(shader, 1, &ptr, nullptr);

@@ -3,10 +3,13 @@
 // dispatch on buffers that stay on the GPU. The state is uploaded once, stepped many times, and read back on
 // demand (position(), velocity(), state()): nothing crosses the bus between steps unless asked.
 //
-// What it runs so far: predict, the distance constraints (stretch, shear, bending; one dispatch per colour, all
-// iterations, with the XPBD multipliers when several passes meet a compliant set) and the velocity update, for
-// float. Fixed vertices are those of inverse mass 0. Solids, pins with targets, repulsion and the rigid-body
-// coupling are CPU-only for now: the constructor takes no solids, so a scene cannot silently lose them.
+// What it runs so far, for float: predict, the distance constraints (stretch, shear, bending; one dispatch per
+// colour, all iterations, with the XPBD multipliers when several passes meet a compliant set), the velocity
+// update, and the improved and vertex-only collision methods against one plane, static or kinematic: the vertex
+// pass, the velocity split with Coulomb friction, and propagation ring by ring; and the local origin following
+// the cloth, as on the CPU. Fixed vertices are those of inverse mass 0. Curved solids (whose faces need the
+// deepest-point search), several solids, pins with targets, repulsion, the baseline method and the rigid-body
+// coupling are CPU-only for now: asking for one is an error that says so, so a scene never silently loses it.
 //
 // Each kernel in shaders/ has its CPU twin named in its header comment; tests/gpu/ compares each pair.
 
@@ -16,8 +19,12 @@
 #include <drape/gpu/shader_sources.hpp>
 #include <drape/settings.hpp>
 
+#include <drape/sdf/solid.hpp>
+
 #include <memory>
+#include <optional>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 namespace drape::gpu {
@@ -25,6 +32,8 @@ namespace drape::gpu {
 class Solver {
  public:
   using scalar_type = float;
+  /// Whether this solver takes solids of that shape type.
+  template <class Shape> static constexpr bool kHasShape = std::is_same_v<Shape, Plane>;
 
   /// Uploads the asset's constraints and its rest state (masses from areaDensity, kg/m^2). `context` must be
   /// current and outlive the solver.
@@ -32,11 +41,17 @@ class Solver {
          double areaDensity = 0.1)
       : context_((context.makeCurrent(), &context)),  // current before the kernels compile
         asset_((drape::detail::require(asset != nullptr, "the cloth asset is null"), std::move(asset))),
-        settings_((settings.validate(), settings)),
+        settings_((check(settings), settings)),
         state_(ClothState<float>::fromAsset(*asset_, areaDensity)),
         predict_("predict", shaders::predict),
         solve_("solve_distance", shaders::solve_distance),
-        update_("update_velocity", shaders::update_velocity) {
+        update_("update_velocity", shaders::update_velocity),
+        collidePlane_("collide_vertices", shaders::collide_vertices, "#define DRAPE_SHAPE DRAPE_SHAPE_PLANE\n"),
+        respond_("respond", shaders::respond, "#define DRAPE_FRICTION 0\n"),
+        respondFriction_("respond", shaders::respond, "#define DRAPE_FRICTION 1\n"),
+        propagate_("propagate", shaders::propagate),
+        centre_("centre", shaders::centre),
+        translate_("translate", shaders::translate) {
     // The three sets, colour by colour, in one buffer: set s's colour c starts at offset_[s] + colourOffsets[c].
     std::vector<layout::Constraint> constraints;
     const DistanceSet<float>* sets[3] = {&asset_->stretch, &asset_->shear, &asset_->bending};
@@ -54,14 +69,49 @@ class Solver {
     velocities_.assign(zero);
     predicted_.assign(zero);
     packed_.assign(zero);
+    start_.assign(zero);
+    contacts_.assign(std::vector<layout::Contact>(zero.size(), layout::Contact{}));
+    rings_.assign(std::vector<layout::Ring>(zero.size(), layout::Ring{}));
+    reduction_.assign(std::vector<layout::Vertex>(1));
+    const Adjacency& around = asset_->vertexNeighbours;
+    neighbourOffsets_.assign(std::vector<std::uint32_t>(around.offsets.begin(), around.offsets.end()));
+    neighbours_.assign(std::vector<std::uint32_t>(around.items.begin(), around.items.end()));
     upload();
   }
 
   const Settings& settings() const { return settings_; }
-  /// Takes new settings (validated first: a bad field changes nothing).
+  /// Takes new settings (checked first: a bad field, or one the GPU does not run yet, changes nothing).
   void setSettings(const Settings& s) {
-    s.validate();
+    check(s);
     settings_ = s;
+  }
+
+  // --- solids (one plane for now) -----------------------------------------------------------------------
+  /// Adds the solid. The GPU takes one plane, static or kinematic, without a repulsion region, for now.
+  template <class Shape> Index addSolid(const Solid<Shape>& solid) {
+    static_assert(kHasShape<Shape>, "the GPU solver takes planes only for now (curved solids are CPU-only)");
+    drape::detail::validateSolid(solid, "solid");
+    drape::detail::require(!plane_, "the GPU solver takes one solid for now (this would be the second)");
+    checkSupported(solid);
+    plane_ = solid;
+    return 0;
+  }
+  template <class Shape> const Solid<Shape>& solid(Index k) const {
+    static_assert(kHasShape<Shape>, "the GPU solver takes planes only for now");
+    drape::detail::require(plane_ && k == 0, "solid index " + std::to_string(k) + " out of range");
+    return *plane_;
+  }
+  template <class Shape> void setSolid(Index k, const Solid<Shape>& s) {
+    static_assert(kHasShape<Shape>, "the GPU solver takes planes only for now");
+    drape::detail::require(plane_ && k == 0, "solid index " + std::to_string(k) + " out of range");
+    drape::detail::validateSolid(s, "solid " + std::to_string(k));
+    checkSupported(s);
+    plane_ = s;
+  }
+  /// Calls f(const CompiledSolid<Shape, float>&) for every solid, compiled at the current local origin (for the
+  /// metrics, which read the state back).
+  template <class F> void forEachSolid(F&& f) const {
+    if (plane_) f(drape::detail::compileSolid<Plane, float>(*plane_, state_.origin));
   }
   const ClothAsset<float>& asset() const { return *asset_; }
   Index vertexCount() const { return asset_->vertexCount(); }
@@ -109,17 +159,27 @@ class Solver {
   /// Fixes a vertex where it is (inverse mass 0).
   void pin(Index i) { setInverseMass(i, 0); }
 
-  /// Advances by dt seconds in subStepCount substeps, on the GPU. Nothing is read back.
+  /// Advances by dt seconds in subStepCount substeps, on the GPU. Only the cloth's centre (16 bytes) is read
+  /// back, to move the local origin after the cloth.
   void step(double dt) {
+    step(dt, [](const Solver&) {});
+  }
+  /// The same, calling onSubStep(solver) after every substep (what it reads is read back then).
+  template <class Observer> void step(double dt, Observer&& onSubStep) {
     drape::detail::require(std::isfinite(dt) && dt > 0 && dt <= 10,
                            "step dt must be in (0, 10] s (got " + std::to_string(dt) + ")");
     drape::detail::require(dt / settings_.subStepCount >= 1e-6,
                            "step dt / subStepCount must be at least 1e-6 s (got " +
                                std::to_string(dt / settings_.subStepCount) + ")");
     context_->makeCurrent();
+    rebase();
     const double h = dt / settings_.subStepCount;
-    for (int sub = 0; sub < settings_.subStepCount; ++sub) subStep(float(h));
-    fresh_ = false;
+    for (int sub = 0; sub < settings_.subStepCount; ++sub) {
+      subStep(h);
+      fresh_ = false;
+      onSubStep(std::as_const(*this));
+      context_->makeCurrent();
+    }
   }
 
  private:
@@ -128,20 +188,66 @@ class Solver {
                                                             std::to_string(vertexCount()) + ")");
   }
 
-  void subStep(float h) {
+  /// Settings the GPU runs (the rest are rejected by name).
+  static void check(const Settings& s) {
+    s.validate();
+    drape::detail::require(s.collisionMethod != CollisionMethod::Baseline,
+                           "the GPU solver has no baseline collision method (improved and vertex only)");
+  }
+  template <class Shape> static void checkSupported(const Solid<Shape>& s) {
+    drape::detail::require(s.motion != Motion::Dynamic, "coupled (dynamic) solids are CPU-only for now");
+    drape::detail::require(!(s.repulsion.radius > 0), "repulsion regions are CPU-only for now");
+  }
+
+  /// Moves the local origin after the cloth once its centre is kRebaseDistance away, by a multiple of 1/64 m
+  /// so the shift is exact in float (BasicSolver::rebase). The centre is summed on the GPU.
+  void rebase() {
     const auto n = unsigned(vertexCount());
+    positions_.bind(layout::kPositions);
+    reduction_.bind(layout::kReduction);
+    centre_.set(layout::kCount, n);
+    glUseProgram(centre_.id());
+    glDispatchCompute(1, 1, 1);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+    const layout::Vertex c = reduction_.read()[0];
+    const Eigen::Vector3d centre(c.x, c.y, c.z);
+    if (!(centre.norm() >= 0.5)) return;
+    const Eigen::Vector3d shift = (centre * 64.0).array().round().matrix() / 64.0;
+    const Vec3<float> shiftF = shift.cast<float>();
+    translate_.set(layout::kCount, n);
+    translate_.set(layout::kShift, shiftF.x(), shiftF.y(), shiftF.z());
+    translate_.dispatch(n);
+    state_.origin += shift;
+  }
+
+  void subStep(double hd) {
+    const float h = float(hd);
+    const auto n = unsigned(vertexCount());
+    // The solid for this substep: a kinematic one moves first, as on the CPU (prepareSolids).
+    std::optional<CompiledSolid<Plane, float>> solid;
+    if (plane_) {
+      drape::detail::advancePose(*plane_, hd);
+      solid = drape::detail::compileSolid<Plane, float>(*plane_, state_.origin);
+    }
+    const bool friction = solid && (solid->motion.staticFriction > 0 || solid->motion.dynamicFriction > 0);
     positions_.bind(layout::kPositions);
     velocities_.bind(layout::kVelocities);
     predicted_.bind(layout::kPredicted);
     packed_.bind(layout::kPacked);
     constraints_.bind(layout::kConstraints);
     lambdas_.bind(layout::kLambdas);
+    start_.bind(layout::kStart);
+    contacts_.bind(layout::kContacts);
+    neighbourOffsets_.bind(layout::kNeighbourOffsets);
+    neighbours_.bind(layout::kNeighbours);
+    rings_.bind(layout::kPropagation);
 
     // 1. predict
     const Vec3<float> gh = (settings_.gravity * double(h)).cast<float>();
     predict_.set(layout::kCount, n);
     predict_.set(layout::kStep, h);
     predict_.set(layout::kGravityStep, gh.x(), gh.y(), gh.z());
+    predict_.set(layout::kKeepStart, unsigned(friction));
     predict_.dispatch(n);
 
     // 2. solve, set by set and colour by colour, as the CPU solver orders them
@@ -169,6 +275,35 @@ class Solver {
     update_.set(layout::kCount, n);
     update_.set(layout::kInverseStep, 1.0f / h);
     update_.dispatch(n);
+
+    // 4. collide (DESIGN 4): project, split, propagate
+    if (!solid) return;
+    const auto& m = solid->motion;
+    collidePlane_.set(layout::kCount, n);
+    collidePlane_.set(layout::kThickness, float(settings_.thickness));
+    glProgramUniform4f(collidePlane_.id(), layout::kShape, solid->sdf.normal.x(), solid->sdf.normal.y(),
+                       solid->sdf.normal.z(), solid->sdf.offset);
+    collidePlane_.set(layout::kSolidCentre, m.centre.x(), m.centre.y(), m.centre.z());
+    collidePlane_.set(layout::kSolidLinear, m.linearVelocity.x(), m.linearVelocity.y(), m.linearVelocity.z());
+    collidePlane_.set(layout::kSolidAngular, m.angularVelocity.x(), m.angularVelocity.y(), m.angularVelocity.z());
+    collidePlane_.dispatch(n);
+    const Program& respond = friction ? respondFriction_ : respond_;
+    respond.set(layout::kCount, n);
+    respond.set(layout::kStep, h);
+    respond.set(layout::kInverseStep, 1.0f / h);
+    respond.set(layout::kNormalDamping, float(settings_.normalDamping));
+    glProgramUniform2f(respond.id(), layout::kFriction, m.staticFriction, m.dynamicFriction);
+    respond.dispatch(n);
+    if (settings_.collisionMethod != CollisionMethod::Improved || settings_.propagationRings <= 0 ||
+        !(settings_.propagationWeight > 0))
+      return;
+    glClearNamedBufferData(rings_.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, nullptr);
+    propagate_.set(layout::kCount, n);
+    propagate_.set(layout::kWeight, float(settings_.propagationWeight));
+    for (int ring = 1; ring <= settings_.propagationRings; ++ring) {
+      propagate_.set(layout::kRing, unsigned(ring));
+      propagate_.dispatch(n);
+    }
   }
 
   /// The CPU copy of the state into the GPU's buffers.
@@ -201,8 +336,12 @@ class Solver {
   Settings settings_;
   mutable ClothState<float> state_;  ///< the CPU copy: current when fresh_
   mutable bool fresh_ = true;
-  Program predict_, solve_, update_;
-  Buffer<layout::Vertex> positions_, velocities_, predicted_, packed_;
+  std::optional<Solid<Plane>> plane_;  ///< the one solid, posed as of the last substep
+  Program predict_, solve_, update_, collidePlane_, respond_, respondFriction_, propagate_, centre_, translate_;
+  Buffer<layout::Vertex> positions_, velocities_, predicted_, packed_, start_, reduction_;
+  Buffer<layout::Contact> contacts_;
+  Buffer<layout::Ring> rings_;
+  Buffer<std::uint32_t> neighbourOffsets_, neighbours_;
   Buffer<layout::Constraint> constraints_;
   Buffer<float> lambdas_;
   std::size_t setStart_[3] = {0, 0, 0};

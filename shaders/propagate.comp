@@ -1,0 +1,60 @@
+// DESIGN 4, propagation (the CPU twin: propagateCorrections in include/drape/collision/response.hpp), one
+// dispatch per ring: a free vertex not in contact gathers from its neighbours in the ring before (ring 1: the
+// contact vertices that gained normal velocity) the mean of their corrections times the weight, along their
+// mean normal, and takes of it only what removes its own approach toward the solid. Each vertex writes only
+// itself, and gathers its neighbours in the asset's order, so the sums are the CPU's.
+layout(local_size_x = DRAPE_WORKGROUP) in;
+layout(std430, binding = DRAPE_B_VELOCITIES) buffer Velocities { vec4 v[]; };
+layout(std430, binding = DRAPE_B_POSITIONS) readonly buffer Positions { vec4 x[]; };
+layout(std430, binding = DRAPE_B_CONTACTS) readonly buffer Contacts { Contact contacts[]; };
+layout(std430, binding = DRAPE_B_NEIGHBOUR_OFFSETS) readonly buffer NeighbourOffsets { uint neighbourOffsets[]; };
+layout(std430, binding = DRAPE_B_NEIGHBOURS) readonly buffer Neighbours { uint neighbours[]; };
+layout(std430, binding = DRAPE_B_PROPAGATION) buffer Propagation { Ring rings[]; };
+layout(location = DRAPE_U_COUNT) uniform uint count;
+layout(location = DRAPE_U_RING) uniform uint ring;
+layout(location = DRAPE_U_WEIGHT) uniform float weight;
+
+void main() {
+  const uint j = gl_GlobalInvocationID.x;
+  if (j >= count) return;
+  if (contacts[j].solidVelocity.w != 0.0 || x[j].w == 0.0) return;
+  if (ring > 1u && rings[j].reached != 0u) return;  // settled in an earlier ring
+  precise vec3 normalSum = vec3(0.0), velocitySum = vec3(0.0);
+  precise float amountSum = 0.0;
+  int found = 0;
+  for (uint k = neighbourOffsets[j]; k < neighbourOffsets[j + 1u]; ++k) {
+    const uint i = neighbours[k];
+    if (ring == 1u) {
+      const Contact c = contacts[i];
+      if (c.solidVelocity.w == 0.0 || c.normalDv.x <= 0.0) continue;
+      // ContactBuffer::normal with one slot: the normal weighted by its correction, normalised.
+      precise const vec3 weighted = c.normal.w * c.normal.xyz;
+      precise const float len = length3(weighted);
+      normalSum = normalSum + (len > 0.0 ? weighted / len : c.normal.xyz);
+      velocitySum = velocitySum + c.solidVelocity.xyz;
+      amountSum = amountSum + c.normalDv.x;
+    } else {
+      const Ring r = rings[i];
+      if (r.reached != ring - 1u || r.amount <= 0.0) continue;
+      normalSum = normalSum + r.normal.xyz;
+      velocitySum = velocitySum + r.velocity.xyz;
+      amountSum = amountSum + r.amount;
+    }
+    ++found;
+  }
+  if (found == 0) return;
+  rings[j].reached = ring;
+  rings[j].amount = 0.0;
+  precise const float len = length3(normalSum);
+  if (len <= 0.0) return;
+  precise const float inv = 1.0 / float(found);
+  precise const vec3 nj = normalSum / len;
+  precise const vec3 vc = velocitySum * inv;
+  const vec3 vj = v[j].xyz;
+  precise const float approach = -dot3(nj, vj - vc);
+  precise const float give = weight * amountSum * inv;
+  if (approach > 0.0) v[j] = vec4(vj + min(approach, give) * nj, 0.0);
+  rings[j].amount = give;
+  rings[j].normal = vec4(nj, 0.0);
+  rings[j].velocity = vec4(vc, 0.0);
+}
