@@ -153,6 +153,7 @@ template <class SolverT> SlopeResult runSlopeOn(SolverT& solver, const SlopeConf
       solver.step(c.dt, onSubStep);
     else
       solver.step(c.dt);
+    if constexpr (requires { solver.finish(); }) solver.finish();  // a GPU's step is timed to its end
     frameMs.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count() -
                       observerMs);
     if (!c.penetrationEverySubstep) {

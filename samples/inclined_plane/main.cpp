@@ -1,7 +1,12 @@
 // The inclined-plane sample (paper 002, Figs 5 and 8): a cloth falls onto a slope and slides down it.
-// Prints a summary to stderr; --json prints one JSON object on stdout and nothing else there.
+// Prints a summary to stderr; --json prints one JSON object on stdout and nothing else there. --gpu runs the
+// same scene on the GPU solver (float; built where drape::gpu is, DRAPE_SAMPLE_GPU).
 
 #include "slope.hpp"
+
+#if DRAPE_SAMPLE_GPU
+#include <drape/gpu/solver.hpp>
+#endif
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
@@ -12,7 +17,8 @@
 int main(int argc, char** argv) {
   drape::scenes::SlopeConfig c;
   std::string method = "improved", scalar = "float";
-  bool json = false;
+  bool json = false, gpu = false;
+  std::string backend = "auto";
   CLI::App app{"drape inclined plane: a cloth falls onto a slope and slides"};
   app.add_option("--angle", c.angleDeg, "slope angle in degrees")->check(CLI::Range(0.0, 80.0))->capture_default_str();
   app.add_option("--friction", c.friction, "Coulomb friction coefficient")->check(CLI::Range(0.0, 100.0))->capture_default_str();
@@ -26,6 +32,10 @@ int main(int argc, char** argv) {
   app.add_option("--method", method, "collision method")->check(CLI::IsMember({"improved", "baseline", "vertex"}))->capture_default_str();
   app.add_option("--scalar", scalar, "floating-point type")->check(CLI::IsMember({"float", "double"}))->capture_default_str();
   app.add_flag("--json", json, "print one JSON object on stdout");
+  app.add_flag("--gpu", gpu, "run on the GPU (float; improved or vertex method)");
+  app.add_option("--backend", backend, "GPU context: auto (EGL hardware device, else OSMesa), egl or osmesa")
+      ->check(CLI::IsMember({"auto", "egl", "osmesa"}))
+      ->capture_default_str();
   app.add_option("--trace", c.traceFile, "CSV per frame: time, tracked vertex height above the slope, metrics");
   app.add_option("--obj", c.objDir, "directory for one OBJ file per frame");
   try {
@@ -38,8 +48,27 @@ int main(int argc, char** argv) {
                                   : drape::CollisionMethod::Improved;
   try {
     if (!c.objDir.empty()) std::filesystem::create_directories(c.objDir);
-    const auto r = scalar == "double" ? drape::scenes::runSlope<double>(c) : drape::scenes::runSlope<float>(c);
+    drape::scenes::SlopeResult r;
+    std::string device = "cpu", renderer;
+    if (gpu) {
+#if DRAPE_SAMPLE_GPU
+      if (scalar != "float") throw drape::Error("--gpu runs float only");
+      drape::gpu::Context context(drape::gpu::backendFromString(backend));
+      const auto parts = drape::scenes::slopeParts<float>(c);
+      drape::gpu::Solver solver(context, parts.asset, parts.settings, c.areaDensity);
+      solver.addSolid(parts.slope);
+      r = drape::scenes::runSlopeOn(solver, c);
+      device = std::string("gpu/") + drape::gpu::toString(context.backend());
+      renderer = context.renderer();
+#else
+      throw drape::Error("this build has no GPU part (it needs glad, Debian python3-glad, and libegl-dev)");
+#endif
+    } else {
+      r = scalar == "double" ? drape::scenes::runSlope<double>(c) : drape::scenes::runSlope<float>(c);
+    }
     nlohmann::ordered_json j;
+    j["device"] = device;
+    if (!renderer.empty()) j["renderer"] = renderer;
     j["vertices"] = r.vertices;
     j["faces"] = r.faces;
     j["substeps"] = c.subSteps;
@@ -67,10 +96,10 @@ int main(int argc, char** argv) {
     j["finite"] = r.finite;
     if (json) std::cout << j.dump() << '\n';
     std::fprintf(stderr,
-                 "%s/%s %dx%d, %d substeps x %d iterations, %.0f deg, mu %.2f, %d frames: %.3f ms/frame "
+                 "%s: %s/%s %dx%d, %d substeps x %d iterations, %.0f deg, mu %.2f, %d frames: %.3f ms/frame "
                  "(%.1f ns per vertex-substep)\n  trembling rms %.3g m/s (max %.3g), acceleration %.4f m/s^2 "
                  "(analytic %.4f), creep %.3g m/s, penetration %.3g m, strain mean %.3g max %.3g, contact %.0f%%\n",
-                 method.c_str(), scalar.c_str(), c.nx, c.ny, c.subSteps, c.iterations, c.angleDeg, c.friction,
+                 device.c_str(), method.c_str(), scalar.c_str(), c.nx, c.ny, c.subSteps, c.iterations, c.angleDeg, c.friction,
                  c.frames, r.msPerFrame, r.nsPerVertexSubstep, r.tremblingRms, r.tremblingMax, r.acceleration,
                  r.analyticAcceleration, r.creep, r.maxPenetration, r.meanStrain, r.maxStrain,
                  100 * r.contactFraction);

@@ -164,6 +164,11 @@ class Solver {
   void step(double dt) {
     step(dt, [](const Solver&) {});
   }
+  /// Waits until the GPU has done every step asked of it (for timing: step() returns once it is queued).
+  void finish() const {
+    context_->makeCurrent();
+    glFinish();
+  }
   /// The same, calling onSubStep(solver) after every substep (what it reads is read back then).
   template <class Observer> void step(double dt, Observer&& onSubStep) {
     drape::detail::require(std::isfinite(dt) && dt > 0 && dt <= 10,
