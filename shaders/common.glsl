@@ -18,11 +18,21 @@ vec3 solidVelocityAt(vec3 x, vec3 centre, vec3 linear, vec3 angular) {
 }
 
 // The signed distance of a solid's field and its gradient, for the shape the kernel is compiled for
-// (DRAPE_SHAPE): a plane (shape = normal, offset), phi = n . x - offset.
+// (DRAPE_SHAPE; the CPU twins: Sdf<Shape, S> in include/drape/sdf/shapes.hpp):
+// - a plane, shape = (outward normal, offset): phi = n . x - offset;
+// - a sphere, shape = (centre, radius): phi = |x - centre| - radius, gradient +z at the centre itself.
 #if DRAPE_SHAPE == DRAPE_SHAPE_PLANE
 float sdf(vec3 x, vec4 shape, out vec3 gradient) {
   gradient = shape.xyz;
   precise float phi = dot3(shape.xyz, x) - shape.w;
+  return phi;
+}
+#elif DRAPE_SHAPE == DRAPE_SHAPE_SPHERE
+float sdf(vec3 x, vec4 shape, out vec3 gradient) {
+  precise const vec3 d = x - shape.xyz;
+  precise const float len = length3(d);
+  gradient = len > 0.0 ? d / len : vec3(0.0, 0.0, 1.0);
+  precise float phi = len - shape.w;
   return phi;
 }
 #endif

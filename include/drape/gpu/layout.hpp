@@ -29,6 +29,7 @@ enum Binding : unsigned {
   kNeighbours = 9,        ///< uint: the neighbours of every vertex (the asset's vertexNeighbours, in order)
   kPropagation = 10,      ///< Ring per vertex: what a propagation ring passed to the vertex
   kReduction = 11,        ///< vec4: a reduction's result (the centre of the positions)
+  kFaces = 12,            ///< uvec4 per face: its three vertices (and 0), colour by colour
 };
 
 /// Uniform locations (set per dispatch with glProgramUniform*).
@@ -41,7 +42,7 @@ enum Uniform : int {
   kUseLambda = 5,     ///< uint: 1 to accumulate multipliers (several passes of a compliant set), else 0
   kInverseStep = 6,   ///< float: 1 / h
   kThickness = 7,     ///< float: the cloth's thickness (m)
-  kShape = 8,         ///< vec4: the solid's field (a plane: outward normal, offset)
+  kShape = 8,         ///< vec4: the solid's field (a plane: outward normal, offset; a sphere: centre, radius)
   kSolidCentre = 9,   ///< vec3: the solid's frame origin (m, the cloth's local frame)
   kSolidLinear = 10,  ///< vec3: its linear velocity (m/s)
   kSolidAngular = 11, ///< vec3: its angular velocity (rad/s)
@@ -51,10 +52,11 @@ enum Uniform : int {
   kWeight = 15,       ///< float: Settings::propagationWeight
   kKeepStart = 16,    ///< uint: 1 to keep the start positions (a scene with friction), else 0
   kShift = 17,        ///< vec3: how far the local origin moves (m)
+  kPgdIterations = 18,  ///< int: Settings::pgdIterations, the face search's most field evaluations
 };
 
 /// Shape codes for DRAPE_SHAPE, the shape a collision kernel is compiled for.
-enum ShapeCode : int { kPlane = 1 };
+enum ShapeCode : int { kPlane = 1, kSphere = 2 };
 
 /// One distance constraint: |x_a - x_b| = rest.
 struct Constraint {
@@ -129,7 +131,10 @@ inline std::string preamble(const std::string& defines = {}) {
   s += define("DRAPE_U_KEEP_START", kKeepStart);
   s += define("DRAPE_B_REDUCTION", kReduction);
   s += define("DRAPE_U_SHIFT", kShift);
+  s += define("DRAPE_B_FACES", kFaces);
+  s += define("DRAPE_U_PGD_ITERATIONS", kPgdIterations);
   s += define("DRAPE_SHAPE_PLANE", kPlane);
+  s += define("DRAPE_SHAPE_SPHERE", kSphere);
   // A kernel compiled without a choice gets the plane and friction (so every kernel compiles on its own).
   s += "#ifndef DRAPE_SHAPE\n#define DRAPE_SHAPE DRAPE_SHAPE_PLANE\n#endif\n";
   s += "#ifndef DRAPE_FRICTION\n#define DRAPE_FRICTION 1\n#endif\n";

@@ -5,11 +5,18 @@
 //
 // What it runs so far, for float: predict, the distance constraints (stretch, shear, bending; one dispatch per
 // colour, all iterations, with the XPBD multipliers when several passes meet a compliant set), the velocity
-// update, and the improved and vertex-only collision methods against one plane, static or kinematic: the vertex
-// pass, the velocity split with Coulomb friction, and propagation ring by ring; and the local origin following
-// the cloth, as on the CPU. Fixed vertices are those of inverse mass 0. Curved solids (whose faces need the
-// deepest-point search), several solids, pins with targets, repulsion, the baseline method and the rigid-body
-// coupling are CPU-only for now: asking for one is an error that says so, so a scene never silently loses it.
+// update, and the improved and vertex-only collision methods against one solid, a plane or a sphere, static or
+// kinematic: the vertex pass, the face pass (bounding-sphere cull and cutting-plane search for the deepest
+// point, one dispatch per colour of faces that share no vertex), the velocity split with Coulomb friction, and
+// propagation ring by ring; and the local origin following the cloth, as on the CPU. Fixed vertices are those of
+// inverse mass 0. Other shapes, several solids, pins with targets, repulsion, the baseline method and the
+// rigid-body coupling are CPU-only for now: asking for one is an error that says so, so a scene never silently
+// loses it.
+//
+// Against a plane the GPU gives the CPU's bits on llvmpipe. Against a sphere the face pass visits the faces colour
+// by colour where the CPU goes in index order (another order of the same Gauss-Seidel pass), and a vertex keeps
+// one contact record per substep where the CPU keeps up to three differently facing ones (a face turned more
+// than 18 degrees from the vertex's own contact); the two then agree on the scene's invariants, not bit for bit.
 //
 // Each kernel in shaders/ has its CPU twin named in its header comment; tests/gpu/ compares each pair.
 
@@ -21,6 +28,8 @@
 
 #include <drape/sdf/solid.hpp>
 
+#include <algorithm>
+#include <array>
 #include <memory>
 #include <optional>
 #include <string>
@@ -29,11 +38,47 @@
 
 namespace drape::gpu {
 
+/// Faces in colours that share no vertex, for the face pass: colour c is faces[offsets[c], offsets[c + 1]), each
+/// as (a, b, c, 0), in index order within the colour.
+struct FaceColours {
+  std::vector<std::array<std::uint32_t, 4>> faces;
+  std::vector<std::size_t> offsets;
+};
+
+/// Greedy colouring in index order: a face takes the lowest colour none of its vertices has yet (at most 32; a
+/// grid cloth takes 6 to 8). Throws drape::Error if a vertex is in so many faces that 32 do not do.
+inline FaceColours colourFaces(const std::vector<std::array<Index, 3>>& triangles, Index vertexCount) {
+  std::vector<std::uint32_t> taken(std::size_t(vertexCount), 0);  // bit c: colour c has the vertex
+  std::vector<int> colour(triangles.size());
+  int colours = 0;
+  for (std::size_t f = 0; f < triangles.size(); ++f) {
+    std::uint32_t used = 0;
+    for (Index v : triangles[f]) used |= taken[std::size_t(v)];
+    int c = 0;
+    while (c < 32 && (used >> c & 1u)) ++c;
+    drape::detail::require(c < 32, "the GPU face pass needs at most 32 face colours (face " + std::to_string(f) +
+                                       " has a vertex in too many faces)");
+    colour[f] = c;
+    for (Index v : triangles[f]) taken[std::size_t(v)] |= 1u << c;
+    colours = std::max(colours, c + 1);
+  }
+  FaceColours out;
+  out.offsets.assign(1, 0);
+  for (int c = 0; c < colours; ++c) {
+    for (std::size_t f = 0; f < triangles.size(); ++f)
+      if (colour[f] == c)
+        out.faces.push_back({std::uint32_t(triangles[f][0]), std::uint32_t(triangles[f][1]),
+                             std::uint32_t(triangles[f][2]), 0u});
+    out.offsets.push_back(out.faces.size());
+  }
+  return out;
+}
+
 class Solver {
  public:
   using scalar_type = float;
   /// Whether this solver takes solids of that shape type.
-  template <class Shape> static constexpr bool kHasShape = std::is_same_v<Shape, Plane>;
+  template <class Shape> static constexpr bool kHasShape = std::is_same_v<Shape, Plane> || std::is_same_v<Shape, Sphere>;
 
   /// Uploads the asset's constraints and its rest state (masses from areaDensity, kg/m^2). `context` must be
   /// current and outlive the solver.
@@ -47,6 +92,8 @@ class Solver {
         solve_("solve_distance", shaders::solve_distance),
         update_("update_velocity", shaders::update_velocity),
         collidePlane_("collide_vertices", shaders::collide_vertices, "#define DRAPE_SHAPE DRAPE_SHAPE_PLANE\n"),
+        collideSphere_("collide_vertices", shaders::collide_vertices, "#define DRAPE_SHAPE DRAPE_SHAPE_SPHERE\n"),
+        facesSphere_("collide_faces", shaders::collide_faces, "#define DRAPE_SHAPE DRAPE_SHAPE_SPHERE\n"),
         respond_("respond", shaders::respond, "#define DRAPE_FRICTION 0\n"),
         respondFriction_("respond", shaders::respond, "#define DRAPE_FRICTION 1\n"),
         propagate_("propagate", shaders::propagate),
@@ -76,6 +123,7 @@ class Solver {
     const Adjacency& around = asset_->vertexNeighbours;
     neighbourOffsets_.assign(std::vector<std::uint32_t>(around.offsets.begin(), around.offsets.end()));
     neighbours_.assign(std::vector<std::uint32_t>(around.items.begin(), around.items.end()));
+    uploadFaces();
     upload();
   }
 
@@ -86,32 +134,34 @@ class Solver {
     settings_ = s;
   }
 
-  // --- solids (one plane for now) -----------------------------------------------------------------------
-  /// Adds the solid. The GPU takes one plane, static or kinematic, without a repulsion region, for now.
+  // --- solids (one plane or sphere for now) ----------------------------------------------------------------
+  /// Adds the solid. The GPU takes one plane or sphere, static or kinematic, without a repulsion region, for now.
   template <class Shape> Index addSolid(const Solid<Shape>& solid) {
-    static_assert(kHasShape<Shape>, "the GPU solver takes planes only for now (curved solids are CPU-only)");
+    static_assert(kHasShape<Shape>, "the GPU solver takes planes and spheres only for now");
     drape::detail::validateSolid(solid, "solid");
-    drape::detail::require(!plane_, "the GPU solver takes one solid for now (this would be the second)");
+    drape::detail::require(!plane_ && !sphere_, "the GPU solver takes one solid for now (this would be the second)");
     checkSupported(solid);
-    plane_ = solid;
+    slot<Shape>() = solid;
     return 0;
   }
   template <class Shape> const Solid<Shape>& solid(Index k) const {
-    static_assert(kHasShape<Shape>, "the GPU solver takes planes only for now");
-    drape::detail::require(plane_ && k == 0, "solid index " + std::to_string(k) + " out of range");
-    return *plane_;
+    static_assert(kHasShape<Shape>, "the GPU solver takes planes and spheres only for now");
+    const auto& held = const_cast<Solver*>(this)->slot<Shape>();
+    drape::detail::require(held && k == 0, "solid index " + std::to_string(k) + " out of range");
+    return *held;
   }
   template <class Shape> void setSolid(Index k, const Solid<Shape>& s) {
-    static_assert(kHasShape<Shape>, "the GPU solver takes planes only for now");
-    drape::detail::require(plane_ && k == 0, "solid index " + std::to_string(k) + " out of range");
+    static_assert(kHasShape<Shape>, "the GPU solver takes planes and spheres only for now");
+    drape::detail::require(slot<Shape>() && k == 0, "solid index " + std::to_string(k) + " out of range");
     drape::detail::validateSolid(s, "solid " + std::to_string(k));
     checkSupported(s);
-    plane_ = s;
+    slot<Shape>() = s;
   }
   /// Calls f(const CompiledSolid<Shape, float>&) for every solid, compiled at the current local origin (for the
   /// metrics, which read the state back).
   template <class F> void forEachSolid(F&& f) const {
     if (plane_) f(drape::detail::compileSolid<Plane, float>(*plane_, state_.origin));
+    if (sphere_) f(drape::detail::compileSolid<Sphere, float>(*sphere_, state_.origin));
   }
   const ClothAsset<float>& asset() const { return *asset_; }
   Index vertexCount() const { return asset_->vertexCount(); }
@@ -193,6 +243,19 @@ class Solver {
                                                             std::to_string(vertexCount()) + ")");
   }
 
+  template <class Shape> std::optional<Solid<Shape>>& slot() {
+    if constexpr (std::is_same_v<Shape, Plane>)
+      return plane_;
+    else
+      return sphere_;
+  }
+
+  void uploadFaces() {
+    const FaceColours coloured = gpu::colourFaces(asset_->triangles, vertexCount());
+    faceColourOffsets_ = coloured.offsets;
+    faces_.assign(coloured.faces);
+  }
+
   /// Settings the GPU runs (the rest are rejected by name).
   static void check(const Settings& s) {
     s.validate();
@@ -228,13 +291,22 @@ class Solver {
   void subStep(double hd) {
     const float h = float(hd);
     const auto n = unsigned(vertexCount());
-    // The solid for this substep: a kinematic one moves first, as on the CPU (prepareSolids).
-    std::optional<CompiledSolid<Plane, float>> solid;
+    // The solid for this substep: a kinematic one moves first, as on the CPU (prepareSolids). Its field goes to
+    // the kernels as one vec4 (a plane's normal and offset, a sphere's centre and radius).
+    std::optional<SolidMotion<float>> motion;
+    Eigen::Vector4f field;
     if (plane_) {
       drape::detail::advancePose(*plane_, hd);
-      solid = drape::detail::compileSolid<Plane, float>(*plane_, state_.origin);
+      const auto compiled = drape::detail::compileSolid<Plane, float>(*plane_, state_.origin);
+      motion = compiled.motion;
+      field << compiled.sdf.normal, compiled.sdf.offset;
+    } else if (sphere_) {
+      drape::detail::advancePose(*sphere_, hd);
+      const auto compiled = drape::detail::compileSolid<Sphere, float>(*sphere_, state_.origin);
+      motion = compiled.motion;
+      field << compiled.sdf.centre, compiled.sdf.radius;
     }
-    const bool friction = solid && (solid->motion.staticFriction > 0 || solid->motion.dynamicFriction > 0);
+    const bool friction = motion && (motion->staticFriction > 0 || motion->dynamicFriction > 0);
     positions_.bind(layout::kPositions);
     velocities_.bind(layout::kVelocities);
     predicted_.bind(layout::kPredicted);
@@ -281,17 +353,31 @@ class Solver {
     update_.set(layout::kInverseStep, 1.0f / h);
     update_.dispatch(n);
 
-    // 4. collide (DESIGN 4): project, split, propagate
-    if (!solid) return;
-    const auto& m = solid->motion;
-    collidePlane_.set(layout::kCount, n);
-    collidePlane_.set(layout::kThickness, float(settings_.thickness));
-    glProgramUniform4f(collidePlane_.id(), layout::kShape, solid->sdf.normal.x(), solid->sdf.normal.y(),
-                       solid->sdf.normal.z(), solid->sdf.offset);
-    collidePlane_.set(layout::kSolidCentre, m.centre.x(), m.centre.y(), m.centre.z());
-    collidePlane_.set(layout::kSolidLinear, m.linearVelocity.x(), m.linearVelocity.y(), m.linearVelocity.z());
-    collidePlane_.set(layout::kSolidAngular, m.angularVelocity.x(), m.angularVelocity.y(), m.angularVelocity.z());
-    collidePlane_.dispatch(n);
+    // 4. collide (DESIGN 3, 4): project vertices, then (a curved solid, improved method) faces; split; propagate
+    if (!motion) return;
+    const SolidMotion<float>& m = *motion;
+    auto setSolid = [&](const Program& k) {
+      k.set(layout::kThickness, float(settings_.thickness));
+      glProgramUniform4f(k.id(), layout::kShape, field[0], field[1], field[2], field[3]);
+      k.set(layout::kSolidCentre, m.centre.x(), m.centre.y(), m.centre.z());
+      k.set(layout::kSolidLinear, m.linearVelocity.x(), m.linearVelocity.y(), m.linearVelocity.z());
+      k.set(layout::kSolidAngular, m.angularVelocity.x(), m.angularVelocity.y(), m.angularVelocity.z());
+    };
+    const Program& vertices = plane_ ? collidePlane_ : collideSphere_;
+    setSolid(vertices);
+    vertices.set(layout::kCount, n);
+    vertices.dispatch(n);
+    if (sphere_ && settings_.collisionMethod == CollisionMethod::Improved) {
+      faces_.bind(layout::kFaces);
+      setSolid(facesSphere_);
+      glProgramUniform1i(facesSphere_.id(), layout::kPgdIterations, settings_.pgdIterations);
+      for (std::size_t c = 0; c + 1 < faceColourOffsets_.size(); ++c) {
+        const std::size_t count = faceColourOffsets_[c + 1] - faceColourOffsets_[c];
+        facesSphere_.set(layout::kFirst, unsigned(faceColourOffsets_[c]));
+        facesSphere_.set(layout::kCount, unsigned(count));
+        facesSphere_.dispatch(count);
+      }
+    }
     const Program& respond = friction ? respondFriction_ : respond_;
     respond.set(layout::kCount, n);
     respond.set(layout::kStep, h);
@@ -341,8 +427,12 @@ class Solver {
   Settings settings_;
   mutable ClothState<float> state_;  ///< the CPU copy: current when fresh_
   mutable bool fresh_ = true;
-  std::optional<Solid<Plane>> plane_;  ///< the one solid, posed as of the last substep
-  Program predict_, solve_, update_, collidePlane_, respond_, respondFriction_, propagate_, centre_, translate_;
+  std::optional<Solid<Plane>> plane_;    ///< the one solid (a plane or a sphere), posed as of the last substep
+  std::optional<Solid<Sphere>> sphere_;
+  Program predict_, solve_, update_, collidePlane_, collideSphere_, facesSphere_, respond_, respondFriction_,
+      propagate_, centre_, translate_;
+  Buffer<std::array<std::uint32_t, 4>> faces_;  ///< the faces, colour by colour (colourFaces)
+  std::vector<std::size_t> faceColourOffsets_;   ///< colour c is faces [offsets[c], offsets[c + 1])
   Buffer<layout::Vertex> positions_, velocities_, predicted_, packed_, start_, reduction_;
   Buffer<layout::Contact> contacts_;
   Buffer<layout::Ring> rings_;

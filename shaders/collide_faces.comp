@@ -1,0 +1,147 @@
+// DESIGN 3 and 4, the face pass (the CPU twins: queryFace and deepestPointOnFace in
+// include/drape/collision/pgd.hpp, projectFaceContactsAs in include/drape/collision/response.hpp), for one colour
+// of faces: faces of a colour share no vertex, so each invocation moves its own three vertices. Per face: the
+// bounding-sphere cull (phi at the centroid beyond the radius plus the thickness), then Kelley's cutting-plane
+// search for the deepest point (the field of a convex solid is convex along the face, so each tangent plane
+// bounds it from below and the search stops once the best value is certified), and where that point is closer
+// than the thickness, the face's vertices move along the normal, weighted by barycentric weight and inverse
+// mass, to carry it to the thickness. The moves are recorded in the vertices' contacts as the CPU merges a
+// contact with the same surface: the latest normal and solid velocity, the corrections summed.
+//
+// The CPU visits every face in index order; here the colours go in turn and the faces of one colour at once,
+// which is another order of the same Gauss-Seidel pass: a colour's faces on their own give the CPU's bits.
+layout(local_size_x = DRAPE_WORKGROUP) in;
+layout(std430, binding = DRAPE_B_POSITIONS) buffer Positions { vec4 x[]; };
+layout(std430, binding = DRAPE_B_CONTACTS) buffer Contacts { Contact contacts[]; };
+layout(std430, binding = DRAPE_B_FACES) readonly buffer Faces { uvec4 faces[]; };
+layout(location = DRAPE_U_COUNT) uniform uint count;
+layout(location = DRAPE_U_FIRST) uniform uint first;
+layout(location = DRAPE_U_THICKNESS) uniform float thickness;
+layout(location = DRAPE_U_SHAPE) uniform vec4 shape;
+layout(location = DRAPE_U_SOLID_CENTRE) uniform vec3 centre;
+layout(location = DRAPE_U_SOLID_LINEAR) uniform vec3 linearVelocity;
+layout(location = DRAPE_U_SOLID_ANGULAR) uniform vec3 angularVelocity;
+layout(location = DRAPE_U_PGD_ITERATIONS) uniform int maxIterations;
+
+const int kMaxCuts = 16;
+const int kMaxVertices = 2 * kMaxCuts + 6;
+const float kGap = 3e-4;
+
+vec3 cuts[kMaxCuts];
+vec3 poly[kMaxVertices];
+vec3 clipped[kMaxVertices];
+
+// A cut: the tangent plane phi + n . (x - p) at barycentric b, as its values at the three corners.
+vec3 cutAt(vec3 b, float phi, vec3 n, vec3 e1, vec3 e2) {
+  precise const vec3 q = b.y * e1 + b.z * e2;
+  precise const float nd = dot3(n, q);
+  precise const vec3 c = vec3(phi - nd, phi + dot3(n, e1) - nd, phi + dot3(n, e2) - nd);
+  return c;
+}
+
+void main() {
+  if (gl_GlobalInvocationID.x >= count) return;
+  const uvec4 t = faces[first + gl_GlobalInvocationID.x];
+  const vec4 a = x[t.x], b = x[t.y], c = x[t.z];
+  const vec3 x0 = a.xyz, x1 = b.xyz, x2 = c.xyz;
+  // Bounding sphere and cull (faceSphere, queryFace).
+  precise const vec3 middle = ((x0 + x1) + x2) / 3.0;
+  precise const float r2 = max(max(dot3(x0 - middle, x0 - middle), dot3(x1 - middle, x1 - middle)),
+                               dot3(x2 - middle, x2 - middle));
+  const float radius = sqrt(r2);
+  vec3 gradC;
+  const float phiC = sdf(middle, shape, gradC);
+  if (phiC > radius + thickness) return;
+
+  // The cutting-plane search (deepestPointOnFace) with floor = thickness.
+  vec3 qb = vec3(1.0 / 3.0), qp = middle, qn = gradC;
+  float qphi = phiC;
+  int evaluations = 1;
+  precise const vec3 e1 = x1 - x0, e2 = x2 - x0;
+  precise const vec3 e3 = x2 - x1;
+  const float extent = max(max(length3(e1), length3(e2)), length3(e3));
+  precise const float tolerance = kGap * extent;
+  int cutCount = 1;
+  cuts[0] = cutAt(qb, phiC, gradC, e1, e2);
+  int corner = 0;
+  float model = cuts[0].x;
+  if (cuts[0].y < model) model = cuts[0].y, corner = 1;
+  if (cuts[0].z < model) model = cuts[0].z, corner = 2;
+  vec3 nextB = vec3(corner == 0 ? 1.0 : 0.0, corner == 1 ? 1.0 : 0.0, corner == 2 ? 1.0 : 0.0);
+  float lower = model;
+  bool exact = true;
+  precise const float stopAt = thickness + tolerance;
+  while (evaluations < maxIterations && qphi - lower > tolerance && lower < stopAt) {
+    precise const vec3 bb = nextB / (nextB.x + (nextB.y + nextB.z));  // Eigen sums the last two first
+    precise const vec3 p = (x0 + bb.y * e1) + bb.z * e2;
+    vec3 n;
+    const float phi = sdf(p, shape, n);
+    ++evaluations;
+    if (phi < qphi) qb = bb, qp = p, qn = n, qphi = phi;
+    if (qphi - lower <= tolerance) break;
+    const vec3 cut = cutAt(bb, phi, n, e1, e2);
+    if (cutCount == kMaxCuts) {  // keep the cuts active at the model's minimum
+      int kept = 0;
+      precise const float slack = 0.01 * tolerance;
+      for (int k = 0; k < cutCount; ++k)
+        if (dot3(cuts[k], bb) >= model - slack && kept < kMaxCuts - 1) cuts[kept++] = cuts[k];
+      if (kept == kMaxCuts - 1) exact = false;
+      cutCount = kept;
+    }
+    // Clip the triangle to where the new cut is highest; the model's minimum is the lowest vertex left.
+    int vertices = 3;
+    poly[0] = vec3(1.0, 0.0, 0.0);
+    poly[1] = vec3(0.0, 1.0, 0.0);
+    poly[2] = vec3(0.0, 0.0, 1.0);
+    for (int k = 0; k < cutCount && vertices > 0; ++k) {
+      precise const vec3 hk = cut - cuts[k];
+      int outCount = 0;
+      bool full = false;
+      for (int i = 0; i < vertices; ++i) {
+        const vec3 u = poly[i];
+        const vec3 v = poly[(i + 1) % vertices];
+        precise const float su = dot3(hk, u), sv = dot3(hk, v);
+        if (outCount + 2 > kMaxVertices) {
+          full = true;
+          break;
+        }
+        if (su >= 0.0) clipped[outCount++] = u;
+        if ((su >= 0.0) != (sv >= 0.0)) {
+          precise const vec3 w = u + (su / (su - sv)) * (v - u);
+          clipped[outCount++] = w;
+        }
+      }
+      vertices = (full || outCount + 2 > kMaxVertices) ? 0 : outCount;
+      for (int i = 0; i < outCount; ++i) poly[i] = clipped[i];
+    }
+    if (vertices == 0) break;
+    cuts[cutCount++] = cut;
+    int arg = 0;
+    model = dot3(cut, poly[0]);
+    for (int i = 1; i < vertices; ++i) {
+      const float m = dot3(cut, poly[i]);
+      if (m < model) model = m, arg = i;
+    }
+    nextB = max(poly[arg], vec3(0.0));
+    if (exact) lower = max(lower, model);
+  }
+  if (qphi >= thickness) return;
+
+  // Move the face's vertices (projectFaceContactsAs).
+  precise const vec3 wb = vec3(a.w * qb.x, b.w * qb.y, c.w * qb.z);
+  precise const float denom = dot3(wb, qb);
+  if (denom <= 0.0) return;
+  precise const float depth = thickness - qphi;
+  for (int k = 0; k < 3; ++k) {
+    if (wb[k] <= 0.0) continue;
+    const uint vi = t[k];
+    precise const float dn = wb[k] / denom * depth;
+    const vec4 xv = x[vi];
+    precise const vec3 moved = xv.xyz + dn * qn;
+    x[vi] = vec4(moved, xv.w);
+    Contact ct = contacts[vi];
+    ct.normal = vec4(qn, (ct.solidVelocity.w != 0.0 ? ct.normal.w : 0.0) + dn);
+    ct.solidVelocity = vec4(solidVelocityAt(moved, centre, linearVelocity, angularVelocity), 1.0);
+    contacts[vi] = ct;
+  }
+}
