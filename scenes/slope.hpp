@@ -107,8 +107,10 @@ inline void writeObj(const std::string& path, const std::vector<Eigen::Vector3d>
   for (const auto& t : triangles) out << "f " << t[0] + 1 << ' ' << t[1] + 1 << ' ' << t[2] + 1 << '\n';
 }
 
-/// Runs the scene on `solver` (made from slopeParts(c), on the CPU or the GPU) and measures it.
-template <class SolverT> SlopeResult runSlopeOn(SolverT& solver, const SlopeConfig& c) {
+/// Runs the scene on `solver` (made from slopeParts(c), on the CPU or the GPU) and measures it; onFrame(f), if
+/// given, is called after frame f's metrics (for pictures).
+template <class SolverT>
+SlopeResult runSlopeOn(SolverT& solver, const SlopeConfig& c, const std::function<void(int)>& onFrame = {}) {
   const Index n = solver.vertexCount();
   const double theta = c.angleDeg * std::numbers::pi / 180.0;
   const double g = c.base.gravity.norm();
@@ -182,6 +184,7 @@ template <class SolverT> SlopeResult runSlopeOn(SolverT& solver, const SlopeConf
       std::snprintf(name, sizeof name, "/frame_%04d.obj", f);
       writeObj(c.objDir + name, x, solver.asset().triangles);
     }
+    if (onFrame) onFrame(f);
   }
   std::vector<double> sorted = frameMs;
   std::sort(sorted.begin(), sorted.end());

@@ -1,11 +1,17 @@
 // The inclined-plane sample (paper 002, Figs 5 and 8): a cloth falls onto a slope and slides down it.
 // Prints a summary to stderr; --json prints one JSON object on stdout and nothing else there. --gpu runs the
-// same scene on the GPU solver (float; built where drape::gpu is, DRAPE_SAMPLE_GPU).
+// same scene on the GPU solver (float), and --png DIR draws frames offscreen with the same kind of context and
+// writes them as PNGs (both built where drape::gpu is, DRAPE_SAMPLE_GPU; PNGs through Debian's stb).
 
 #include "slope.hpp"
 
 #if DRAPE_SAMPLE_GPU
+#include <drape/gpu/render.hpp>
 #include <drape/gpu/solver.hpp>
+
+#include <stb/stb_image_write.h>
+
+#include <memory>
 #endif
 
 #include <CLI/CLI.hpp>
@@ -18,7 +24,8 @@ int main(int argc, char** argv) {
   drape::scenes::SlopeConfig c;
   std::string method = "improved", scalar = "float";
   bool json = false, gpu = false;
-  std::string backend = "auto";
+  std::string backend = "auto", pngDir;
+  int pngEvery = 30;
   CLI::App app{"drape inclined plane: a cloth falls onto a slope and slides"};
   app.add_option("--angle", c.angleDeg, "slope angle in degrees")->check(CLI::Range(0.0, 80.0))->capture_default_str();
   app.add_option("--friction", c.friction, "Coulomb friction coefficient")->check(CLI::Range(0.0, 100.0))->capture_default_str();
@@ -38,6 +45,8 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--trace", c.traceFile, "CSV per frame: time, tracked vertex height above the slope, metrics");
   app.add_option("--obj", c.objDir, "directory for one OBJ file per frame");
+  app.add_option("--png", pngDir, "directory for pictures of the scene (drawn offscreen with a GL context)");
+  app.add_option("--png-every", pngEvery, "frames between pictures")->check(CLI::Range(1, 1000000))->capture_default_str();
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -50,18 +59,81 @@ int main(int argc, char** argv) {
     if (!c.objDir.empty()) std::filesystem::create_directories(c.objDir);
     drape::scenes::SlopeResult r;
     std::string device = "cpu", renderer;
+#if DRAPE_SAMPLE_GPU
+    std::unique_ptr<drape::gpu::Context> context;
+    if (gpu || !pngDir.empty()) {
+      context = std::make_unique<drape::gpu::Context>(drape::gpu::backendFromString(backend));
+      renderer = context->renderer();
+    }
+    std::unique_ptr<drape::gpu::Renderer> painter;
+    if (!pngDir.empty()) {
+      std::filesystem::create_directories(pngDir);
+      painter = std::make_unique<drape::gpu::Renderer>(*context, 960, 540);
+    }
+    // A picture of frame f: the camera follows the cloth's centre from the side and above, the slope a checkered
+    // rectangle around it. drawCloth draws the cloth itself (from the GPU's buffer or from CPU positions).
+    const Eigen::Vector3d down = drape::scenes::downhill(c.angleDeg);
+    const Eigen::Vector3d slopeNormal = drape::scenes::slopeRotation(c.angleDeg) * Eigen::Vector3d::UnitZ();
+    auto picture = [&](int f, const Eigen::Vector3d& centre, const std::function<void()>& drawCloth) {
+      if (!painter || f % pngEvery != 0) return;
+      drape::gpu::Camera cam;
+      cam.target = centre;
+      cam.eye = centre + Eigen::Vector3d(1.9, 0.7, 1.9);
+      painter->begin(cam);
+      const Eigen::Vector3d onSlope = centre - slopeNormal.dot(centre) * slopeNormal, across = Eigen::Vector3d::UnitX();
+      drape::gpu::DrawMesh slope;
+      for (double a : {-2.0, 2.0})
+        for (double b : {-3.0, 3.0}) slope.positions.push_back(onSlope + a * across + b * down);
+      slope.triangles = {{0, 2, 3}, {0, 3, 1}};
+      painter->draw(slope, Eigen::Vector3f(0.75f, 0.75f, 0.72f), true);
+      drawCloth();
+      const auto rgba = painter->pixels();
+      char name[32];
+      std::snprintf(name, sizeof name, "/frame_%04d.png", f);
+      if (!stbi_write_png((pngDir + name).c_str(), painter->width(), painter->height(), 4, rgba.data(), painter->width() * 4))
+        throw drape::Error("cannot write " + pngDir + name);
+    };
+    const Eigen::Vector3f clothColour(0.85f, 0.35f, 0.15f);
+#endif
     if (gpu) {
 #if DRAPE_SAMPLE_GPU
       if (scalar != "float") throw drape::Error("--gpu runs float only");
-      drape::gpu::Context context(drape::gpu::backendFromString(backend));
       const auto parts = drape::scenes::slopeParts<float>(c);
-      drape::gpu::Solver solver(context, parts.asset, parts.settings, c.areaDensity);
+      drape::gpu::Solver solver(*context, parts.asset, parts.settings, c.areaDensity);
       solver.addSolid(parts.slope);
-      r = drape::scenes::runSlopeOn(solver, c);
-      device = std::string("gpu/") + drape::gpu::toString(context.backend());
-      renderer = context.renderer();
+      r = drape::scenes::runSlopeOn(solver, c, [&](int f) {
+        if (!painter || f % pngEvery != 0) return;
+        Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+        for (drape::Index i = 0; i < solver.vertexCount(); ++i) centre += solver.position(i) / double(solver.vertexCount());
+        picture(f, centre, [&] { painter->drawTriangles(solver.positionBuffer(), solver.origin(), solver.faceBuffer(), clothColour); });
+      });
+      device = std::string("gpu/") + drape::gpu::toString(context->backend());
 #else
       throw drape::Error("this build has no GPU part (it needs glad, Debian python3-glad, and libegl-dev)");
+#endif
+    } else if (!pngDir.empty()) {
+#if DRAPE_SAMPLE_GPU
+      auto run = [&](auto& solver) {
+        drape::gpu::DrawMesh cloth;
+        cloth.triangles = solver.asset().triangles;
+        return drape::scenes::runSlopeOn(solver, c, [&](int f) {
+          if (f % pngEvery != 0) return;
+          cloth.positions.resize(std::size_t(solver.vertexCount()));
+          Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+          for (drape::Index i = 0; i < solver.vertexCount(); ++i)
+            centre += (cloth.positions[std::size_t(i)] = solver.position(i)) / double(solver.vertexCount());
+          picture(f, centre, [&] { painter->draw(cloth, clothColour); });
+        });
+      };
+      if (scalar == "double") {
+        auto solver = drape::scenes::makeSlope<double>(c);
+        r = run(solver);
+      } else {
+        auto solver = drape::scenes::makeSlope<float>(c);
+        r = run(solver);
+      }
+#else
+      throw drape::Error("this build cannot draw pictures (it needs glad, Debian python3-glad, and libegl-dev)");
 #endif
     } else {
       r = scalar == "double" ? drape::scenes::runSlope<double>(c) : drape::scenes::runSlope<float>(c);

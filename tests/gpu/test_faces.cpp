@@ -4,6 +4,7 @@
 #include "gpu_helpers.hpp"
 
 #include <drape/drape.hpp>
+#include <drape/gpu/render.hpp>
 #include <drape/metrics.hpp>
 
 #include <catch2/catch.hpp>
@@ -168,4 +169,35 @@ TEST_CASE("a cloth dropped on a ball: the GPU and CPU solvers agree on penetrati
   CHECK(gpuDepth <= std::max(2 * cpuDepth, 1e-4));
   CHECK(heightGap <= 0.01);
   CHECK(gpuMeter.rms() <= 2 * cpuMeter.rms() + 1e-3);
+}
+
+TEST_CASE("a picture shows the cloth where the camera looks, over the ground, under the sky", "[gpu]") {
+  auto& context = drape::test::gpuContext();
+  drape::GridDesc grid;
+  grid.nx = grid.ny = 11;
+  grid.spacing = 0.05;
+  grid.placement.position = {0, 0, 0.2};
+  auto asset = std::make_shared<const drape::ClothAsset<float>>(drape::ClothAsset<float>::grid(grid));
+  drape::gpu::Solver gpu(context, asset);
+  drape::gpu::Renderer painter(context, 64, 48);
+  drape::gpu::Camera camera;
+  camera.target = {0, 0, 0.2};
+  camera.eye = {0.0, -1.0, 0.4};  // looking 11 degrees down, with a 40 degree view: sky above, ground below
+  painter.begin(camera);
+  drape::gpu::DrawMesh ground;
+  ground.positions = {{-5, -5, 0}, {5, -5, 0}, {5, 5, 0}, {-5, 5, 0}};
+  ground.triangles = {{0, 1, 2}, {0, 2, 3}};
+  painter.draw(ground, Eigen::Vector3f(0.2f, 0.8f, 0.2f));  // green
+  painter.drawTriangles(gpu.positionBuffer(), gpu.origin(), gpu.faceBuffer(), Eigen::Vector3f(0.9f, 0.1f, 0.1f));
+  const auto rgba = painter.pixels();
+  REQUIRE(rgba.size() == 64u * 48u * 4u);
+  auto at = [&](int x, int y) { return &rgba[(std::size_t(y) * 64 + std::size_t(x)) * 4]; };
+  const std::uint8_t* centre = at(32, 24);
+  CHECK(centre[0] > 2 * centre[1]);  // red: the cloth, drawn over the ground it hides
+  CHECK(centre[0] > 2 * centre[2]);
+  const std::uint8_t* top = at(2, 1);
+  CHECK(top[2] > top[1]);
+  CHECK(top[2] > 200);
+  const std::uint8_t* bottom = at(2, 46);  // ground below
+  CHECK(bottom[1] > 2 * bottom[0]);
 }

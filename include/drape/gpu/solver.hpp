@@ -214,6 +214,13 @@ class Solver {
   void step(double dt) {
     step(dt, [](const Solver&) {});
   }
+  /// The GPU's position buffer (vec4: position relative to state().origin, inverse mass) and the faces, colour
+  /// by colour, for drawing the cloth where it is (Renderer::drawTriangles) without reading it back.
+  const Buffer<layout::Vertex>& positionBuffer() const { return positions_; }
+  const Buffer<std::array<std::uint32_t, 4>>& faceBuffer() const { return faces_; }
+  /// The local origin the positions are relative to (world, m): the state's, without reading the state back.
+  const Eigen::Vector3d& origin() const { return state_.origin; }
+
   /// Waits until the GPU has done every step asked of it (for timing: step() returns once it is queued).
   void finish() const {
     context_->makeCurrent();
