@@ -17,7 +17,6 @@ layout(std430, binding = DRAPE_B_FACES) readonly buffer Faces { uvec4 faces[]; }
 layout(location = DRAPE_U_COUNT) uniform uint count;
 layout(location = DRAPE_U_FIRST) uniform uint first;
 layout(location = DRAPE_U_THICKNESS) uniform float thickness;
-layout(location = DRAPE_U_SHAPE) uniform vec4 shape;
 layout(location = DRAPE_U_SOLID_CENTRE) uniform vec3 centre;
 layout(location = DRAPE_U_SOLID_LINEAR) uniform vec3 linearVelocity;
 layout(location = DRAPE_U_SOLID_ANGULAR) uniform vec3 angularVelocity;
@@ -50,7 +49,7 @@ void main() {
                                dot3(x2 - middle, x2 - middle));
   const float radius = sqrt(r2);
   vec3 gradC;
-  const float phiC = sdf(middle, shape, gradC);
+  const float phiC = sdf(middle, gradC);
   if (phiC > radius + thickness) return;
 
   // The cutting-plane search (deepestPointOnFace) with floor = thickness.
@@ -75,7 +74,7 @@ void main() {
     precise const vec3 bb = nextB / (nextB.x + (nextB.y + nextB.z));  // Eigen sums the last two first
     precise const vec3 p = (x0 + bb.y * e1) + bb.z * e2;
     vec3 n;
-    const float phi = sdf(p, shape, n);
+    const float phi = sdf(p, n);
     ++evaluations;
     if (phi < qphi) qb = bb, qp = p, qn = n, qphi = phi;
     if (qphi - lower <= tolerance) break;

@@ -7,7 +7,6 @@ layout(std430, binding = DRAPE_B_POSITIONS) buffer Positions { vec4 x[]; };
 layout(std430, binding = DRAPE_B_CONTACTS) writeonly buffer Contacts { Contact contacts[]; };
 layout(location = DRAPE_U_COUNT) uniform uint count;
 layout(location = DRAPE_U_THICKNESS) uniform float thickness;
-layout(location = DRAPE_U_SHAPE) uniform vec4 shape;
 layout(location = DRAPE_U_SOLID_CENTRE) uniform vec3 centre;
 layout(location = DRAPE_U_SOLID_LINEAR) uniform vec3 linearVelocity;
 layout(location = DRAPE_U_SOLID_ANGULAR) uniform vec3 angularVelocity;
@@ -22,7 +21,7 @@ void main() {
   c.normalDv = vec4(0.0);
   if (xi.w != 0.0) {
     vec3 n;
-    const float phi = sdf(xi.xyz, shape, n);
+    const float phi = sdf(xi.xyz, n);
     if (phi < thickness) {
       precise const float dn = thickness - phi;
       precise const vec3 p = xi.xyz + dn * n;

@@ -17,22 +17,112 @@ vec3 solidVelocityAt(vec3 x, vec3 centre, vec3 linear, vec3 angular) {
   return v;
 }
 
-// The signed distance of a solid's field and its gradient, for the shape the kernel is compiled for
-// (DRAPE_SHAPE; the CPU twins: Sdf<Shape, S> in include/drape/sdf/shapes.hpp):
-// - a plane, shape = (outward normal, offset): phi = n . x - offset;
-// - a sphere, shape = (centre, radius): phi = |x - centre| - radius, gradient +z at the centre itself.
+// Rows r0, r1, r2 of a rotation times v, and its transpose times v, as Eigen sums them.
+vec3 rotate(vec3 r0, vec3 r1, vec3 r2, vec3 v) { return vec3(dot3(r0, v), dot3(r1, v), dot3(r2, v)); }
+vec3 rotateBack(vec3 r0, vec3 r1, vec3 r2, vec3 v) {
+  return vec3(dot3(vec3(r0.x, r1.x, r2.x), v), dot3(vec3(r0.y, r1.y, r2.y), v), dot3(vec3(r0.z, r1.z, r2.z), v));
+}
+
+// The solid's field, packed by drape::gpu::packShape (include/drape/gpu/shapes.hpp).
+layout(location = DRAPE_U_SHAPE) uniform vec4 shape[4];
+
+// The signed distance of the solid's field at x and its gradient, for the shape the kernel is compiled for
+// (DRAPE_SHAPE). Each is the twin of Sdf<Shape, S>::operator() in include/drape/sdf/shapes.hpp or convex.hpp,
+// step for step.
 #if DRAPE_SHAPE == DRAPE_SHAPE_PLANE
-float sdf(vec3 x, vec4 shape, out vec3 gradient) {
-  gradient = shape.xyz;
-  precise float phi = dot3(shape.xyz, x) - shape.w;
+// shape[0] = (outward normal, offset): phi = n . x - offset.
+float sdf(vec3 x, out vec3 gradient) {
+  gradient = shape[0].xyz;
+  precise float phi = dot3(shape[0].xyz, x) - shape[0].w;
   return phi;
 }
 #elif DRAPE_SHAPE == DRAPE_SHAPE_SPHERE
-float sdf(vec3 x, vec4 shape, out vec3 gradient) {
-  precise const vec3 d = x - shape.xyz;
+// shape[0] = (centre, radius): phi = |x - centre| - radius, gradient +z at the centre itself.
+float sdf(vec3 x, out vec3 gradient) {
+  precise const vec3 d = x - shape[0].xyz;
   precise const float len = length3(d);
   gradient = len > 0.0 ? d / len : vec3(0.0, 0.0, 1.0);
-  precise float phi = len - shape.w;
+  precise float phi = len - shape[0].w;
+  return phi;
+}
+#elif DRAPE_SHAPE == DRAPE_SHAPE_BOX
+// shape[0].xyz = centre; shape[1..3] = the rows of the world-to-box rotation, with the half extents in w.
+float sdf(vec3 x, out vec3 gradient) {
+  const vec3 r0 = shape[1].xyz, r1 = shape[2].xyz, r2 = shape[3].xyz;
+  const vec3 half_ = vec3(shape[1].w, shape[2].w, shape[3].w);
+  precise const vec3 q = rotate(r0, r1, r2, x - shape[0].xyz);
+  precise const vec3 excess = abs(q) - half_;
+  const vec3 outside = max(excess, vec3(0.0));
+  precise const float outsideLen = length3(outside);
+  vec3 g;
+  float phi;
+  if (outsideLen > 0.0) {
+    precise const vec3 gg = (outside * sign(q)) / outsideLen;
+    g = gg;
+    phi = outsideLen;
+  } else {  // inside: the nearest face wins (the first on a tie, as Eigen's maxCoeff)
+    int k = 0;
+    if (excess.y > excess[k]) k = 1;
+    if (excess.z > excess[k]) k = 2;
+    phi = excess[k];
+    g = vec3(0.0);
+    g[k] = q[k] < 0.0 ? -1.0 : 1.0;
+  }
+  gradient = rotateBack(r0, r1, r2, g);
+  return phi;
+}
+#elif DRAPE_SHAPE == DRAPE_SHAPE_CAPSULE
+// shape[0] = (centre, half height), shape[1] = (unit axis, radius), shape[2].xyz = a unit vector orthogonal to
+// the axis (Eigen's unitOrthogonal, computed once on the CPU): the gradient on the core segment itself.
+float sdf(vec3 x, out vec3 gradient) {
+  const vec3 axis = shape[1].xyz;
+  const float halfHeight = shape[0].w;
+  precise const vec3 r = x - shape[0].xyz;
+  const float t = clamp(dot3(r, axis), -halfHeight, halfHeight);
+  precise const vec3 d = r - t * axis;
+  precise const float len = length3(d);
+  gradient = len > 0.0 ? d / len : shape[2].xyz;
+  precise float phi = len - shape[1].w;
+  return phi;
+}
+#elif DRAPE_SHAPE == DRAPE_SHAPE_CYLINDER
+// shape[0] = (centre, radius), shape[1..3] = the rows of the world-to-cylinder rotation, half height in
+// shape[1].w. The 2D field of the (radial, axial) half-plane: outside the rim's quadrant |(dr, dz)|, else the
+// larger of dr and dz.
+float sdf(vec3 x, out vec3 gradient) {
+  const vec3 r0 = shape[1].xyz, r1 = shape[2].xyz, r2 = shape[3].xyz;
+  const float radius = shape[0].w, halfHeight = shape[1].w;
+  precise const vec3 q = rotate(r0, r1, r2, x - shape[0].xyz);
+  precise const float r2sum = q.x * q.x + q.y * q.y;
+  precise const float rr = sqrt(r2sum);
+  float ux = 1.0, uy = 0.0;
+  if (r2sum >= 1.17549435e-38) {  // FLT_MIN: on (or subnormally near) the axis every radial direction will do
+    precise const float a = q.x / rr, b = q.y / rr;
+    ux = a;
+    uy = b;
+  }
+  const float sz = q.z < 0.0 ? -1.0 : 1.0;
+  precise const float dr = rr - radius;
+  precise const float dz = abs(q.z) - halfHeight;
+  vec3 g;
+  float phi;
+  if (dr > 0.0 && dz > 0.0) {
+    precise const float p = sqrt(dr * dr + dz * dz);
+    precise const vec3 gg = vec3(dr * ux / p, dr * uy / p, dz * sz / p);
+    phi = p;
+    g = gg;
+  } else if (dr == 0.0 && dz == 0.0) {
+    phi = 0.0;
+    const float c = sqrt(0.5);
+    g = vec3(c * ux, c * uy, c * sz);
+  } else if (dr >= dz) {
+    phi = dr;
+    g = vec3(ux, uy, 0.0);
+  } else {
+    phi = dz;
+    g = vec3(0.0, 0.0, sz);
+  }
+  gradient = rotateBack(r0, r1, r2, g);
   return phi;
 }
 #endif

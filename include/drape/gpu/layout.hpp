@@ -42,7 +42,6 @@ enum Uniform : int {
   kUseLambda = 5,     ///< uint: 1 to accumulate multipliers (several passes of a compliant set), else 0
   kInverseStep = 6,   ///< float: 1 / h
   kThickness = 7,     ///< float: the cloth's thickness (m)
-  kShape = 8,         ///< vec4: the solid's field (a plane: outward normal, offset; a sphere: centre, radius)
   kSolidCentre = 9,   ///< vec3: the solid's frame origin (m, the cloth's local frame)
   kSolidLinear = 10,  ///< vec3: its linear velocity (m/s)
   kSolidAngular = 11, ///< vec3: its angular velocity (rad/s)
@@ -53,10 +52,11 @@ enum Uniform : int {
   kKeepStart = 16,    ///< uint: 1 to keep the start positions (a scene with friction), else 0
   kShift = 17,        ///< vec3: how far the local origin moves (m)
   kPgdIterations = 18,  ///< int: Settings::pgdIterations, the face search's most field evaluations
+  kShape = 32,  ///< vec4[4] (locations 32-35): the solid's field, packed by packShape (gpu/shapes.hpp)
 };
 
 /// Shape codes for DRAPE_SHAPE, the shape a collision kernel is compiled for.
-enum ShapeCode : int { kPlane = 1, kSphere = 2 };
+enum ShapeCode : int { kPlane = 1, kSphere = 2, kBox = 3, kCapsule = 4, kCylinder = 5 };
 
 /// One distance constraint: |x_a - x_b| = rest.
 struct Constraint {
@@ -135,6 +135,9 @@ inline std::string preamble(const std::string& defines = {}) {
   s += define("DRAPE_U_PGD_ITERATIONS", kPgdIterations);
   s += define("DRAPE_SHAPE_PLANE", kPlane);
   s += define("DRAPE_SHAPE_SPHERE", kSphere);
+  s += define("DRAPE_SHAPE_BOX", kBox);
+  s += define("DRAPE_SHAPE_CAPSULE", kCapsule);
+  s += define("DRAPE_SHAPE_CYLINDER", kCylinder);
   // A kernel compiled without a choice gets the plane and friction (so every kernel compiles on its own).
   s += "#ifndef DRAPE_SHAPE\n#define DRAPE_SHAPE DRAPE_SHAPE_PLANE\n#endif\n";
   s += "#ifndef DRAPE_FRICTION\n#define DRAPE_FRICTION 1\n#endif\n";

@@ -5,15 +5,15 @@
 //
 // What it runs so far, for float: predict, the distance constraints (stretch, shear, bending; one dispatch per
 // colour, all iterations, with the XPBD multipliers when several passes meet a compliant set), the velocity
-// update, and the improved and vertex-only collision methods against one solid, a plane or a sphere, static or
-// kinematic: the vertex pass, the face pass (bounding-sphere cull and cutting-plane search for the deepest
+// update, and the improved and vertex-only collision methods against one solid (a plane, sphere, box, capsule
+// or cylinder), static or kinematic: the vertex pass, the face pass (bounding-sphere cull and cutting-plane search for the deepest
 // point, one dispatch per colour of faces that share no vertex), the velocity split with Coulomb friction, and
 // propagation ring by ring; and the local origin following the cloth, as on the CPU. Fixed vertices are those of
-// inverse mass 0. Other shapes, several solids, pins with targets, repulsion, the baseline method and the
+// inverse mass 0. Hulls and grid fields, several solids, pins with targets, repulsion, the baseline method and the
 // rigid-body coupling are CPU-only for now: asking for one is an error that says so, so a scene never silently
 // loses it.
 //
-// Against a plane the GPU gives the CPU's bits on llvmpipe. Against a sphere the face pass visits the faces colour
+// Against a plane the GPU gives the CPU's bits on llvmpipe. Against a curved solid the face pass visits the faces colour
 // by colour where the CPU goes in index order (another order of the same Gauss-Seidel pass), and a vertex keeps
 // one contact record per substep where the CPU keeps up to three differently facing ones (a face turned more
 // than 18 degrees from the vertex's own contact); the two then agree on the scene's invariants, not bit for bit.
@@ -23,6 +23,7 @@
 #include <drape/cloth/asset.hpp>
 #include <drape/cloth/state.hpp>
 #include <drape/gpu/program.hpp>
+#include <drape/gpu/shapes.hpp>
 #include <drape/gpu/shader_sources.hpp>
 #include <drape/settings.hpp>
 
@@ -34,6 +35,7 @@
 #include <optional>
 #include <string>
 #include <type_traits>
+#include <variant>
 #include <vector>
 
 namespace drape::gpu {
@@ -78,7 +80,7 @@ class Solver {
  public:
   using scalar_type = float;
   /// Whether this solver takes solids of that shape type.
-  template <class Shape> static constexpr bool kHasShape = std::is_same_v<Shape, Plane> || std::is_same_v<Shape, Sphere>;
+  template <class Shape> static constexpr bool kHasShape = kGpuShape<Shape>;
 
   /// Uploads the asset's constraints and its rest state (masses from areaDensity, kg/m^2). `context` must be
   /// current and outlive the solver.
@@ -91,9 +93,6 @@ class Solver {
         predict_("predict", shaders::predict),
         solve_("solve_distance", shaders::solve_distance),
         update_("update_velocity", shaders::update_velocity),
-        collidePlane_("collide_vertices", shaders::collide_vertices, "#define DRAPE_SHAPE DRAPE_SHAPE_PLANE\n"),
-        collideSphere_("collide_vertices", shaders::collide_vertices, "#define DRAPE_SHAPE DRAPE_SHAPE_SPHERE\n"),
-        facesSphere_("collide_faces", shaders::collide_faces, "#define DRAPE_SHAPE DRAPE_SHAPE_SPHERE\n"),
         respond_("respond", shaders::respond, "#define DRAPE_FRICTION 0\n"),
         respondFriction_("respond", shaders::respond, "#define DRAPE_FRICTION 1\n"),
         propagate_("propagate", shaders::propagate),
@@ -134,35 +133,43 @@ class Solver {
     settings_ = s;
   }
 
-  // --- solids (one plane or sphere for now) ----------------------------------------------------------------
-  /// Adds the solid. The GPU takes one plane or sphere, static or kinematic, without a repulsion region, for now.
+  // --- solids (one, a plane, sphere, box, capsule or cylinder, for now) ---------------------------------------
+  /// Adds the solid. The GPU takes one solid, static or kinematic, without a repulsion region, for now; its
+  /// kernels are compiled for its shape here.
   template <class Shape> Index addSolid(const Solid<Shape>& solid) {
-    static_assert(kHasShape<Shape>, "the GPU solver takes planes and spheres only for now");
+    static_assert(kHasShape<Shape>, "the GPU solver has no field for this shape yet (hulls and grids are CPU-only)");
     drape::detail::validateSolid(solid, "solid");
-    drape::detail::require(!plane_ && !sphere_, "the GPU solver takes one solid for now (this would be the second)");
+    drape::detail::require(solid_.index() == 0, "the GPU solver takes one solid for now (this would be the second)");
     checkSupported(solid);
-    slot<Shape>() = solid;
+    compileFor<Shape>();
+    solid_ = solid;
     return 0;
   }
   template <class Shape> const Solid<Shape>& solid(Index k) const {
-    static_assert(kHasShape<Shape>, "the GPU solver takes planes and spheres only for now");
-    const auto& held = const_cast<Solver*>(this)->slot<Shape>();
+    static_assert(kHasShape<Shape>, "the GPU solver has no field for this shape yet");
+    const auto* held = std::get_if<Solid<Shape>>(&solid_);
     drape::detail::require(held && k == 0, "solid index " + std::to_string(k) + " out of range");
     return *held;
   }
   template <class Shape> void setSolid(Index k, const Solid<Shape>& s) {
-    static_assert(kHasShape<Shape>, "the GPU solver takes planes and spheres only for now");
-    drape::detail::require(slot<Shape>() && k == 0, "solid index " + std::to_string(k) + " out of range");
+    static_assert(kHasShape<Shape>, "the GPU solver has no field for this shape yet");
+    drape::detail::require(std::holds_alternative<Solid<Shape>>(solid_) && k == 0,
+                           "solid index " + std::to_string(k) + " out of range");
     drape::detail::validateSolid(s, "solid " + std::to_string(k));
     checkSupported(s);
-    slot<Shape>() = s;
+    solid_ = s;
   }
   /// Calls f(const CompiledSolid<Shape, float>&) for every solid, compiled at the current local origin (for the
   /// metrics, which read the state back).
   template <class F> void forEachSolid(F&& f) const {
-    if (plane_) f(drape::detail::compileSolid<Plane, float>(*plane_, state_.origin));
-    if (sphere_) f(drape::detail::compileSolid<Sphere, float>(*sphere_, state_.origin));
+    std::visit(
+        [&](const auto& held) {
+          if constexpr (!std::is_same_v<std::decay_t<decltype(held)>, std::monostate>)
+            f(drape::detail::compileSolid<std::decay_t<decltype(held.shape)>, float>(held, state_.origin));
+        },
+        solid_);
   }
+
   const ClothAsset<float>& asset() const { return *asset_; }
   Index vertexCount() const { return asset_->vertexCount(); }
 
@@ -250,11 +257,12 @@ class Solver {
                                                             std::to_string(vertexCount()) + ")");
   }
 
-  template <class Shape> std::optional<Solid<Shape>>& slot() {
-    if constexpr (std::is_same_v<Shape, Plane>)
-      return plane_;
-    else
-      return sphere_;
+  /// The solid's shape's vertex and face kernels (the face pass only for a curved one).
+  template <class Shape> void compileFor() {
+    context_->makeCurrent();
+    const std::string define = shapeDefine<Shape>();
+    collideVertices_ = Program("collide_vertices", shaders::collide_vertices, define);
+    if constexpr (!Sdf<Shape, float>::kLinear) collideFaces_ = Program("collide_faces", shaders::collide_faces, define);
   }
 
   void uploadFaces() {
@@ -301,18 +309,20 @@ class Solver {
     // The solid for this substep: a kinematic one moves first, as on the CPU (prepareSolids). Its field goes to
     // the kernels as one vec4 (a plane's normal and offset, a sphere's centre and radius).
     std::optional<SolidMotion<float>> motion;
-    Eigen::Vector4f field;
-    if (plane_) {
-      drape::detail::advancePose(*plane_, hd);
-      const auto compiled = drape::detail::compileSolid<Plane, float>(*plane_, state_.origin);
-      motion = compiled.motion;
-      field << compiled.sdf.normal, compiled.sdf.offset;
-    } else if (sphere_) {
-      drape::detail::advancePose(*sphere_, hd);
-      const auto compiled = drape::detail::compileSolid<Sphere, float>(*sphere_, state_.origin);
-      motion = compiled.motion;
-      field << compiled.sdf.centre, compiled.sdf.radius;
-    }
+    PackedShape field{};
+    bool curved = false;
+    std::visit(
+        [&](auto& held) {
+          if constexpr (!std::is_same_v<std::decay_t<decltype(held)>, std::monostate>) {
+            using Shape = std::decay_t<decltype(held.shape)>;
+            drape::detail::advancePose(held, hd);
+            const auto compiled = drape::detail::compileSolid<Shape, float>(held, state_.origin);
+            motion = compiled.motion;
+            field = packShape(compiled.sdf);
+            curved = !Sdf<Shape, float>::kLinear;
+          }
+        },
+        solid_);
     const bool friction = motion && (motion->staticFriction > 0 || motion->dynamicFriction > 0);
     positions_.bind(layout::kPositions);
     velocities_.bind(layout::kVelocities);
@@ -365,24 +375,23 @@ class Solver {
     const SolidMotion<float>& m = *motion;
     auto setSolid = [&](const Program& k) {
       k.set(layout::kThickness, float(settings_.thickness));
-      glProgramUniform4f(k.id(), layout::kShape, field[0], field[1], field[2], field[3]);
+      setShape(k.id(), field);
       k.set(layout::kSolidCentre, m.centre.x(), m.centre.y(), m.centre.z());
       k.set(layout::kSolidLinear, m.linearVelocity.x(), m.linearVelocity.y(), m.linearVelocity.z());
       k.set(layout::kSolidAngular, m.angularVelocity.x(), m.angularVelocity.y(), m.angularVelocity.z());
     };
-    const Program& vertices = plane_ ? collidePlane_ : collideSphere_;
-    setSolid(vertices);
-    vertices.set(layout::kCount, n);
-    vertices.dispatch(n);
-    if (sphere_ && settings_.collisionMethod == CollisionMethod::Improved) {
+    setSolid(collideVertices_);
+    collideVertices_.set(layout::kCount, n);
+    collideVertices_.dispatch(n);
+    if (curved && settings_.collisionMethod == CollisionMethod::Improved) {
       faces_.bind(layout::kFaces);
-      setSolid(facesSphere_);
-      glProgramUniform1i(facesSphere_.id(), layout::kPgdIterations, settings_.pgdIterations);
+      setSolid(collideFaces_);
+      glProgramUniform1i(collideFaces_.id(), layout::kPgdIterations, settings_.pgdIterations);
       for (std::size_t c = 0; c + 1 < faceColourOffsets_.size(); ++c) {
         const std::size_t count = faceColourOffsets_[c + 1] - faceColourOffsets_[c];
-        facesSphere_.set(layout::kFirst, unsigned(faceColourOffsets_[c]));
-        facesSphere_.set(layout::kCount, unsigned(count));
-        facesSphere_.dispatch(count);
+        collideFaces_.set(layout::kFirst, unsigned(faceColourOffsets_[c]));
+        collideFaces_.set(layout::kCount, unsigned(count));
+        collideFaces_.dispatch(count);
       }
     }
     const Program& respond = friction ? respondFriction_ : respond_;
@@ -434,10 +443,10 @@ class Solver {
   Settings settings_;
   mutable ClothState<float> state_;  ///< the CPU copy: current when fresh_
   mutable bool fresh_ = true;
-  std::optional<Solid<Plane>> plane_;    ///< the one solid (a plane or a sphere), posed as of the last substep
-  std::optional<Solid<Sphere>> sphere_;
-  Program predict_, solve_, update_, collidePlane_, collideSphere_, facesSphere_, respond_, respondFriction_,
-      propagate_, centre_, translate_;
+  /// The one solid, posed as of the last substep (monostate: none).
+  std::variant<std::monostate, Solid<Plane>, Solid<Sphere>, Solid<Box>, Solid<Capsule>, Solid<Cylinder>> solid_;
+  Program predict_, solve_, update_, respond_, respondFriction_, propagate_, centre_, translate_;
+  Program collideVertices_, collideFaces_;  ///< compiled for the solid's shape (compileFor)
   Buffer<std::array<std::uint32_t, 4>> faces_;  ///< the faces, colour by colour (colourFaces)
   std::vector<std::size_t> faceColourOffsets_;   ///< colour c is faces [offsets[c], offsets[c + 1])
   Buffer<layout::Vertex> positions_, velocities_, predicted_, packed_, start_, reduction_;
