@@ -52,6 +52,7 @@ enum Uniform : int {
   kKeepStart = 16,    ///< uint: 1 to keep the start positions (a scene with friction), else 0
   kShift = 17,        ///< vec3: how far the local origin moves (m)
   kPgdIterations = 18,  ///< int: Settings::pgdIterations, the face search's most field evaluations
+  kRepulsion = 19,      ///< vec2: 1 / the repulsion radius (1/m), and 1 for the smooth falloff (else 0)
   kShape = 32,  ///< vec4[4] (locations 32-35): the solid's field, packed by packShape (gpu/shapes.hpp)
 };
 
@@ -133,6 +134,7 @@ inline std::string preamble(const std::string& defines = {}) {
   s += define("DRAPE_U_SHIFT", kShift);
   s += define("DRAPE_B_FACES", kFaces);
   s += define("DRAPE_U_PGD_ITERATIONS", kPgdIterations);
+  s += define("DRAPE_U_REPULSION", kRepulsion);
   s += define("DRAPE_SHAPE_PLANE", kPlane);
   s += define("DRAPE_SHAPE_SPHERE", kSphere);
   s += define("DRAPE_SHAPE_BOX", kBox);

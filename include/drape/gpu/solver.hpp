@@ -5,18 +5,19 @@
 //
 // What it runs so far, for float: predict, the distance constraints (stretch, shear, bending; one dispatch per
 // colour, all iterations, with the XPBD multipliers when several passes meet a compliant set), the velocity
-// update, and the improved and vertex-only collision methods against one solid (a plane, sphere, box, capsule
-// or cylinder), static or kinematic: the vertex pass, the face pass (bounding-sphere cull and cutting-plane search for the deepest
-// point, one dispatch per colour of faces that share no vertex), the velocity split with Coulomb friction, and
-// propagation ring by ring; and the local origin following the cloth, as on the CPU. Fixed vertices are those of
-// inverse mass 0. Hulls and grid fields, several solids, pins with targets, repulsion, the baseline method and the
-// rigid-body coupling are CPU-only for now: asking for one is an error that says so, so a scene never silently
-// loses it.
+// update, and against one solid (a plane, sphere, box, capsule or cylinder, static or kinematic) the repulsion
+// region and the improved and vertex-only collision methods: the vertex pass, the face pass (bounding-sphere
+// cull and cutting-plane search for the deepest point, one dispatch per colour of faces that share no vertex),
+// the velocity split with Coulomb friction, and propagation ring by ring; and the local origin following the
+// cloth, as on the CPU. Fixed vertices are those of inverse mass 0. Hulls and grid fields, several solids, pins
+// with targets, the baseline method and the rigid-body coupling are CPU-only for now: asking for one is an error
+// that says so, so a scene never silently loses it.
 //
-// Against a plane the GPU gives the CPU's bits on llvmpipe. Against a curved solid the face pass visits the faces colour
-// by colour where the CPU goes in index order (another order of the same Gauss-Seidel pass), and a vertex keeps
-// one contact record per substep where the CPU keeps up to three differently facing ones (a face turned more
-// than 18 degrees from the vertex's own contact); the two then agree on the scene's invariants, not bit for bit.
+// Against a plane the GPU gives the CPU's bits on llvmpipe. Against a curved solid the face pass visits the
+// faces colour by colour where the CPU goes in index order (another order of the same Gauss-Seidel pass), and a
+// vertex keeps one contact record per substep where the CPU keeps up to three differently facing ones (a face
+// turned more than 18 degrees from the vertex's own contact); the two then agree on the scene's invariants, not
+// bit for bit.
 //
 // Each kernel in shaders/ has its CPU twin named in its header comment; tests/gpu/ compares each pair.
 
@@ -134,8 +135,8 @@ class Solver {
   }
 
   // --- solids (one, a plane, sphere, box, capsule or cylinder, for now) ---------------------------------------
-  /// Adds the solid. The GPU takes one solid, static or kinematic, without a repulsion region, for now; its
-  /// kernels are compiled for its shape here.
+  /// Adds the solid. The GPU takes one solid, static or kinematic, for now; its kernels are compiled for its
+  /// shape here.
   template <class Shape> Index addSolid(const Solid<Shape>& solid) {
     static_assert(kHasShape<Shape>, "the GPU solver has no field for this shape yet (hulls and grids are CPU-only)");
     drape::detail::validateSolid(solid, "solid");
@@ -262,6 +263,7 @@ class Solver {
     context_->makeCurrent();
     const std::string define = shapeDefine<Shape>();
     collideVertices_ = Program("collide_vertices", shaders::collide_vertices, define);
+    repel_ = Program("repel", shaders::repel, define);
     if constexpr (!Sdf<Shape, float>::kLinear) collideFaces_ = Program("collide_faces", shaders::collide_faces, define);
   }
 
@@ -279,7 +281,6 @@ class Solver {
   }
   template <class Shape> static void checkSupported(const Solid<Shape>& s) {
     drape::detail::require(s.motion != Motion::Dynamic, "coupled (dynamic) solids are CPU-only for now");
-    drape::detail::require(!(s.repulsion.radius > 0), "repulsion regions are CPU-only for now");
   }
 
   /// Moves the local origin after the cloth once its centre is kRebaseDistance away, by a multiple of 1/64 m
@@ -307,10 +308,12 @@ class Solver {
     const float h = float(hd);
     const auto n = unsigned(vertexCount());
     // The solid for this substep: a kinematic one moves first, as on the CPU (prepareSolids). Its field goes to
-    // the kernels as one vec4 (a plane's normal and offset, a sphere's centre and radius).
+    // the kernels packed in four vec4s (packShape).
     std::optional<SolidMotion<float>> motion;
     PackedShape field{};
     bool curved = false;
+    float repulsionRadius = 0;
+    Falloff falloff = Falloff::Linear;
     std::visit(
         [&](auto& held) {
           if constexpr (!std::is_same_v<std::decay_t<decltype(held)>, std::monostate>) {
@@ -320,6 +323,8 @@ class Solver {
             motion = compiled.motion;
             field = packShape(compiled.sdf);
             curved = !Sdf<Shape, float>::kLinear;
+            repulsionRadius = compiled.repulsionRadius;
+            falloff = compiled.falloff;
           }
         },
         solid_);
@@ -335,6 +340,19 @@ class Solver {
     neighbourOffsets_.bind(layout::kNeighbourOffsets);
     neighbours_.bind(layout::kNeighbours);
     rings_.bind(layout::kPropagation);
+
+    // 0. repulsion (phase 1), only for a solid that has a region
+    if (repulsionRadius > 0) {
+      const SolidMotion<float>& m = *motion;
+      setShape(repel_.id(), field);
+      repel_.set(layout::kCount, n);
+      repel_.set(layout::kThickness, float(settings_.thickness));
+      repel_.set(layout::kSolidCentre, m.centre.x(), m.centre.y(), m.centre.z());
+      repel_.set(layout::kSolidLinear, m.linearVelocity.x(), m.linearVelocity.y(), m.linearVelocity.z());
+      repel_.set(layout::kSolidAngular, m.angularVelocity.x(), m.angularVelocity.y(), m.angularVelocity.z());
+      glProgramUniform2f(repel_.id(), layout::kRepulsion, 1.0f / repulsionRadius, falloff == Falloff::Smooth ? 1.0f : 0.0f);
+      repel_.dispatch(n);
+    }
 
     // 1. predict
     const Vec3<float> gh = (settings_.gravity * double(h)).cast<float>();
@@ -446,7 +464,7 @@ class Solver {
   /// The one solid, posed as of the last substep (monostate: none).
   std::variant<std::monostate, Solid<Plane>, Solid<Sphere>, Solid<Box>, Solid<Capsule>, Solid<Cylinder>> solid_;
   Program predict_, solve_, update_, respond_, respondFriction_, propagate_, centre_, translate_;
-  Program collideVertices_, collideFaces_;  ///< compiled for the solid's shape (compileFor)
+  Program collideVertices_, collideFaces_, repel_;  ///< compiled for the solid's shape (compileFor)
   Buffer<std::array<std::uint32_t, 4>> faces_;  ///< the faces, colour by colour (colourFaces)
   std::vector<std::size_t> faceColourOffsets_;   ///< colour c is faces [offsets[c], offsets[c + 1])
   Buffer<layout::Vertex> positions_, velocities_, predicted_, packed_, start_, reduction_;
