@@ -30,6 +30,8 @@ enum Binding : unsigned {
   kPropagation = 10,      ///< Ring per vertex: what a propagation ring passed to the vertex
   kReduction = 11,        ///< vec4: a reduction's result (the centre of the positions)
   kFaces = 12,            ///< uvec4 per face: its three vertices (and 0), colour by colour
+  kPins = 13,             ///< PinSlot per pin
+  kPinLambdas = 14,       ///< float per pin: its XPBD multiplier in the current substep
 };
 
 /// Uniform locations (set per dispatch with glProgramUniform*).
@@ -90,6 +92,13 @@ struct Ring {
 static_assert(sizeof(Ring) == 48 && offsetof(Ring, velocity) == 16 && offsetof(Ring, amount) == 32 &&
               offsetof(Ring, reached) == 36);
 
+/// A pin: its vertex and its target (m, the cloth's local frame).
+struct PinSlot {
+  float target[3];
+  std::uint32_t vertex;
+};
+static_assert(sizeof(PinSlot) == 16 && offsetof(PinSlot, vertex) == 12);
+
 /// The per-vertex element: four floats, 16 bytes, as std430 lays out a vec4 array.
 struct Vertex {
   float x, y, z, w;
@@ -135,6 +144,8 @@ inline std::string preamble(const std::string& defines = {}) {
   s += define("DRAPE_B_FACES", kFaces);
   s += define("DRAPE_U_PGD_ITERATIONS", kPgdIterations);
   s += define("DRAPE_U_REPULSION", kRepulsion);
+  s += define("DRAPE_B_PINS", kPins);
+  s += define("DRAPE_B_PIN_LAMBDAS", kPinLambdas);
   s += define("DRAPE_SHAPE_PLANE", kPlane);
   s += define("DRAPE_SHAPE_SPHERE", kSphere);
   s += define("DRAPE_SHAPE_BOX", kBox);
@@ -146,6 +157,7 @@ inline std::string preamble(const std::string& defines = {}) {
   s += "struct Constraint { uint a; uint b; float rest; uint pad; };\n";
   s += "struct Contact { vec4 normal; vec4 solidVelocity; vec4 normalDv; };\n";
   s += "struct Ring { vec4 normal; vec4 velocity; float amount; uint reached; uint pad0; uint pad1; };\n";
+  s += "struct PinSlot { vec3 target; uint vertex; };\n";
   return s;
 }
 

@@ -9,9 +9,9 @@
 // region and the improved and vertex-only collision methods: the vertex pass, the face pass (bounding-sphere
 // cull and cutting-plane search for the deepest point, one dispatch per colour of faces that share no vertex),
 // the velocity split with Coulomb friction, and propagation ring by ring; and the local origin following the
-// cloth, as on the CPU. Fixed vertices are those of inverse mass 0. Hulls and grid fields, several solids, pins
-// with targets, the baseline method and the rigid-body coupling are CPU-only for now: asking for one is an error
-// that says so, so a scene never silently loses it.
+// cloth, as on the CPU; fixed vertices (inverse mass 0) and pins with targets. Hulls and grid fields, several
+// solids, the baseline method and the rigid-body coupling are CPU-only for now: asking for one is an error that
+// says so, so a scene never silently loses it.
 //
 // Against a plane the GPU gives the CPU's bits on llvmpipe. Against a curved solid the face pass visits the
 // faces colour by colour where the CPU goes in index order (another order of the same Gauss-Seidel pass), and a
@@ -27,6 +27,7 @@
 #include <drape/gpu/shapes.hpp>
 #include <drape/gpu/shader_sources.hpp>
 #include <drape/settings.hpp>
+#include <drape/solver.hpp>  // drape::Pin
 
 #include <drape/sdf/solid.hpp>
 
@@ -98,7 +99,8 @@ class Solver {
         respondFriction_("respond", shaders::respond, "#define DRAPE_FRICTION 1\n"),
         propagate_("propagate", shaders::propagate),
         centre_("centre", shaders::centre),
-        translate_("translate", shaders::translate) {
+        translate_("translate", shaders::translate),
+        pinKernel_("pins", shaders::pins) {
     // The three sets, colour by colour, in one buffer: set s's colour c starts at offset_[s] + colourOffsets[c].
     std::vector<layout::Constraint> constraints;
     const DistanceSet<float>* sets[3] = {&asset_->stretch, &asset_->shear, &asset_->bending};
@@ -216,6 +218,20 @@ class Solver {
   }
   /// Fixes a vertex where it is (inverse mass 0).
   void pin(Index i) { setInverseMass(i, 0); }
+  /// Attaches a vertex to a world target; with pinCompliance 0 and inverse mass 0 it follows the target
+  /// exactly, otherwise it is pulled by a zero-length XPBD constraint. Returns the pin's index.
+  Index attach(Index i, const Eigen::Vector3d& target) {
+    checkVertex(i);
+    drape::detail::require(drape::detail::allFinite(target), "pin target of vertex " + std::to_string(i) + " is not finite");
+    pins_.push_back({i, target});
+    return Index(pins_.size()) - 1;
+  }
+  void setPinTarget(Index pin, const Eigen::Vector3d& target) {
+    drape::detail::require(pin >= 0 && pin < Index(pins_.size()), "pin index " + std::to_string(pin) + " out of range");
+    drape::detail::require(drape::detail::allFinite(target), "pin target is not finite");
+    pins_[std::size_t(pin)].target = target;
+  }
+  const std::vector<Pin>& pins() const { return pins_; }
 
   /// Advances by dt seconds in subStepCount substeps, on the GPU. Only the cloth's centre (16 bytes) is read
   /// back, to move the local origin after the cloth.
@@ -369,6 +385,24 @@ class Solver {
     const int iterations = settings_.iterationCount;
     if (iterations > 1) glClearNamedBufferData(lambdas_.id(), GL_R32F, GL_RED, GL_FLOAT, nullptr);
     const DistanceSet<float>* sets[3] = {&asset_->stretch, &asset_->shear, &asset_->bending};
+    if (!pins_.empty()) {  // the targets in this substep's local frame, and the pins' multipliers zeroed
+      std::vector<layout::PinSlot> slots(pins_.size());
+      for (std::size_t k = 0; k < pins_.size(); ++k) {
+        const Vec3<float> t = (pins_[k].target - state_.origin).cast<float>();
+        slots[k] = {{t.x(), t.y(), t.z()}, std::uint32_t(pins_[k].vertex)};
+      }
+      if (pinSlots_.size() != slots.size()) {
+        pinSlots_.assign(slots);
+        pinLambdas_.assign(std::vector<float>(slots.size(), 0.0f));
+      } else {
+        pinSlots_.write(slots);
+      }
+      glClearNamedBufferData(pinLambdas_.id(), GL_R32F, GL_RED, GL_FLOAT, nullptr);
+      pinSlots_.bind(layout::kPins);
+      pinLambdas_.bind(layout::kPinLambdas);
+      pinKernel_.set(layout::kCount, unsigned(pins_.size()));
+      pinKernel_.set(layout::kAlphaTilde, float(settings_.pinCompliance) / h2);
+    }
     for (int it = 0; it < iterations; ++it) {
       for (int s = 0; s < 3; ++s) {
         solve_.set(layout::kAlphaTilde, alphas[s]);
@@ -380,6 +414,11 @@ class Solver {
           solve_.set(layout::kCount, count);
           solve_.dispatch(count);
         }
+      }
+      if (!pins_.empty()) {
+        glUseProgram(pinKernel_.id());
+        glDispatchCompute(1, 1, 1);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
       }
     }
 
@@ -463,7 +502,10 @@ class Solver {
   mutable bool fresh_ = true;
   /// The one solid, posed as of the last substep (monostate: none).
   std::variant<std::monostate, Solid<Plane>, Solid<Sphere>, Solid<Box>, Solid<Capsule>, Solid<Cylinder>> solid_;
-  Program predict_, solve_, update_, respond_, respondFriction_, propagate_, centre_, translate_;
+  Program predict_, solve_, update_, respond_, respondFriction_, propagate_, centre_, translate_, pinKernel_;
+  std::vector<Pin> pins_;  ///< targets in world coordinates (uploaded each substep, in the local frame then)
+  Buffer<layout::PinSlot> pinSlots_;
+  Buffer<float> pinLambdas_;
   Program collideVertices_, collideFaces_, repel_;  ///< compiled for the solid's shape (compileFor)
   Buffer<std::array<std::uint32_t, 4>> faces_;  ///< the faces, colour by colour (colourFaces)
   std::vector<std::size_t> faceColourOffsets_;   ///< colour c is faces [offsets[c], offsets[c + 1])
