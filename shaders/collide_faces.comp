@@ -38,6 +38,32 @@ vec3 cutAt(vec3 b, float phi, vec3 n, vec3 e1, vec3 e2) {
   return c;
 }
 
+// The field's slope in barycentric coordinates, within the simplex's plane: g - mean(g), g = (n . x0, n . x1, n . x2).
+vec3 slopeAt(vec3 n, vec3 x0, vec3 x1, vec3 x2) {
+  const vec3 g = vec3(dot3(n, x0), dot3(n, x1), dot3(n, x2));
+  precise const float mean = (g.x + (g.y + g.z)) / 3.0;
+  precise const vec3 s = g - vec3(mean);
+  return s;
+}
+
+// Euclidean projection onto {b : b >= 0, b0 + b1 + b2 = 1} (projectToSimplex): sorted descending, the largest
+// threshold that keeps a coordinate positive.
+vec3 projectToSimplex(vec3 y) {
+  float u0 = y.x, u1 = y.y, u2 = y.z, tmp;
+  if (u1 > u0) tmp = u0, u0 = u1, u1 = tmp;
+  if (u2 > u1) tmp = u1, u1 = u2, u2 = tmp;
+  if (u1 > u0) tmp = u0, u0 = u1, u1 = tmp;
+  const float u[3] = float[3](u0, u1, u2);
+  precise float sum = 0.0;
+  float theta = 0.0;
+  for (int j = 0; j < 3; ++j) {
+    sum = sum + u[j];
+    precise const float t = (sum - 1.0) / float(j + 1);
+    if (u[j] - t > 0.0) theta = t;
+  }
+  return max(y - vec3(theta), vec3(0.0));
+}
+
 void main() {
   if (gl_GlobalInvocationID.x >= count) return;
   const uvec4 t = faces[first + gl_GlobalInvocationID.x];
@@ -52,11 +78,12 @@ void main() {
   const float phiC = sdf(middle, gradC);
   if (phiC > radius + thickness) return;
 
-  // The cutting-plane search (deepestPointOnFace) with floor = thickness.
-  vec3 qb = vec3(1.0 / 3.0), qp = middle, qn = gradC;
+  vec3 qb = vec3(1.0 / 3.0), qn = gradC;
   float qphi = phiC;
   int evaluations = 1;
   precise const vec3 e1 = x1 - x0, e2 = x2 - x0;
+#if DRAPE_CONVEX
+  // The cutting-plane search (deepestPointOnFace) with floor = thickness.
   precise const vec3 e3 = x2 - x1;
   const float extent = max(max(length3(e1), length3(e2)), length3(e3));
   precise const float tolerance = kGap * extent;
@@ -76,7 +103,7 @@ void main() {
     vec3 n;
     const float phi = sdf(p, n);
     ++evaluations;
-    if (phi < qphi) qb = bb, qp = p, qn = n, qphi = phi;
+    if (phi < qphi) qb = bb, qn = n, qphi = phi;
     if (qphi - lower <= tolerance) break;
     const vec3 cut = cutAt(bb, phi, n, e1, e2);
     if (cutCount == kMaxCuts) {  // keep the cuts active at the model's minimum
@@ -124,6 +151,33 @@ void main() {
     nextB = max(poly[arg], vec3(0.0));
     if (exact) lower = max(lower, model);
   }
+#else
+  // Projected gradient descent over the barycentric simplex (the CPU twin: descendOnFace), for a field that may
+  // not be convex: Barzilai-Borwein step lengths, halved when a step does not lower phi.
+  const float kMinStep = 1e-3;
+  vec3 slope = slopeAt(gradC, x0, x1, x2);
+  const float slopeLen = length3(slope);
+  float alpha = slopeLen > 0.0 ? 1.0 / slopeLen : 0.0;  // the first trial moves one unit
+  while (evaluations < maxIterations && alpha > 0.0) {
+    precise const vec3 bb = projectToSimplex(qb - alpha * slope);
+    precise const vec3 stepB = bb - qb;
+    if (max(max(abs(stepB.x), abs(stepB.y)), abs(stepB.z)) < kMinStep) break;
+    precise const vec3 p = (x0 + bb.y * e1) + bb.z * e2;
+    vec3 n;
+    const float phi = sdf(p, n);
+    ++evaluations;
+    if (phi < qphi) {
+      const vec3 next = slopeAt(n, x0, x1, x2);
+      precise const float sy = dot3(stepB, next - slope);
+      precise const float bbStep = dot3(stepB, stepB) / sy;
+      alpha = sy > 0.0 ? bbStep : 2.0 * alpha;
+      slope = next;
+      qb = bb, qn = n, qphi = phi;
+    } else {
+      alpha *= 0.5;
+    }
+  }
+#endif
   if (qphi >= thickness) return;
 
   // Move the face's vertices (projectFaceContactsAs).

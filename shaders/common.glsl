@@ -24,7 +24,7 @@ vec3 rotateBack(vec3 r0, vec3 r1, vec3 r2, vec3 v) {
 }
 
 // The solid's field, packed by drape::gpu::packShape (include/drape/gpu/shapes.hpp).
-layout(location = DRAPE_U_SHAPE) uniform vec4 shape[4];
+layout(location = DRAPE_U_SHAPE) uniform vec4 shape[5];
 
 // The signed distance of the solid's field at x and its gradient, for the shape the kernel is compiled for
 // (DRAPE_SHAPE). Each is the twin of Sdf<Shape, S>::operator() in include/drape/sdf/shapes.hpp or convex.hpp,
@@ -125,4 +125,64 @@ float sdf(vec3 x, out vec3 gradient) {
   gradient = rotateBack(r0, r1, r2, g);
   return phi;
 }
+#elif DRAPE_SHAPE == DRAPE_SHAPE_GRID
+// A distance grid built from a mesh (the CPU twins: Sdf<MeshShape, S> and GridSampler in
+// include/drape/sdf/grid.hpp): shape[0] = (centre, cell size), shape[1..3] = the rows of the world-to-mesh
+// rotation with the grid's lower corner in w, shape[4] = (1 / cell size, node counts along x, y, z); the nodes
+// (normal, distance), x fastest, in their own buffer. Trilinear inside the grid; outside, the distance to the
+// grid's box combined with the distance at the nearest point of the box.
+layout(std430, binding = DRAPE_B_GRID) readonly buffer GridNodes { vec4 nodes[]; };
+
+float sdf(vec3 x, out vec3 gradient) {
+  const vec3 r0 = shape[1].xyz, r1 = shape[2].xyz, r2 = shape[3].xyz;
+  const vec3 lower = vec3(shape[1].w, shape[2].w, shape[3].w);
+  const float cellSize = shape[0].w, invCellSize = shape[4].x;
+  const ivec3 count = ivec3(shape[4].yzw);
+  precise const vec3 q = rotate(r0, r1, r2, x - shape[0].xyz);
+  precise const vec3 u = (q - lower) * invCellSize;  // in cells from node (0, 0, 0)
+  ivec3 cell;
+  vec3 t, excess;  // excess: how far q lies beyond the grid's box along each axis (m), 0 inside
+  for (int a = 0; a < 3; ++a) {
+    const float c = clamp(u[a], 0.0, float(count[a] - 1));
+    precise const float beyond = (u[a] - c) * cellSize;
+    excess[a] = beyond;
+    cell[a] = min(int(c), count[a] - 2);
+    t[a] = c - float(cell[a]);
+  }
+  const int sy = count.x, sz = count.x * count.y;
+  const int n0 = cell.z * sz + cell.y * sy + cell.x;
+  // x, then y, then z: seven lerps of (normal, distance).
+  precise const vec4 c00 = nodes[n0] + t.x * (nodes[n0 + 1] - nodes[n0]);
+  precise const vec4 c10 = nodes[n0 + sy] + t.x * (nodes[n0 + sy + 1] - nodes[n0 + sy]);
+  precise const vec4 c01 = nodes[n0 + sz] + t.x * (nodes[n0 + sz + 1] - nodes[n0 + sz]);
+  precise const vec4 c11 = nodes[n0 + sz + sy] + t.x * (nodes[n0 + sz + sy + 1] - nodes[n0 + sz + sy]);
+  precise const vec4 c0 = c00 + t.y * (c10 - c00);
+  precise const vec4 c1 = c01 + t.y * (c11 - c01);
+  precise const vec4 v = c0 + t.z * (c1 - c0);
+  const float g = v.w;
+  vec3 n = v.xyz;
+  const float len = length3(n);
+  n = len > 0.0 ? n / len : vec3(0.0, 0.0, 1.0);  // node normals that cancel exactly: any unit vector
+  const float e = length3(excess);
+  if (e == 0.0) {
+    gradient = rotateBack(r0, r1, r2, n);
+    return g;
+  }
+  // Outside: the gradient of sqrt(e^2 + g^2), with g's gradient along the box face (the clamped axes drop out).
+  for (int a = 0; a < 3; ++a)
+    if (excess[a] != 0.0) n[a] = 0.0;
+  precise const float phi = g > 0.0 ? sqrt(e * e + g * g) : g + e;
+  precise const vec3 grad = excess + max(g, 0.0) * n;
+  const float glen = length3(grad);
+  gradient = rotateBack(r0, r1, r2, glen > 0.0 ? grad / glen : excess / e);
+  return phi;
+}
+#endif
+
+// Whether the field is convex (every built-in solid; not a grid built from a mesh, which may be non-convex):
+// the face search then bounds the field by its tangent planes (Kelley), else it descends (projected gradient).
+#if DRAPE_SHAPE == DRAPE_SHAPE_GRID
+#define DRAPE_CONVEX 0
+#else
+#define DRAPE_CONVEX 1
 #endif

@@ -32,6 +32,7 @@ enum Binding : unsigned {
   kFaces = 12,            ///< uvec4 per face: its three vertices (and 0), colour by colour
   kPins = 13,             ///< PinSlot per pin
   kPinLambdas = 14,       ///< float per pin: its XPBD multiplier in the current substep
+  kGrid = 15,             ///< vec4 per node of a distance grid: (normal, distance), x fastest
 };
 
 /// Uniform locations (set per dispatch with glProgramUniform*).
@@ -55,11 +56,11 @@ enum Uniform : int {
   kShift = 17,        ///< vec3: how far the local origin moves (m)
   kPgdIterations = 18,  ///< int: Settings::pgdIterations, the face search's most field evaluations
   kRepulsion = 19,      ///< vec2: 1 / the repulsion radius (1/m), and 1 for the smooth falloff (else 0)
-  kShape = 32,  ///< vec4[4] (locations 32-35): the solid's field, packed by packShape (gpu/shapes.hpp)
+  kShape = 32,  ///< vec4[5] (locations 32-36): the solid's field, packed by packShape (gpu/shapes.hpp)
 };
 
 /// Shape codes for DRAPE_SHAPE, the shape a collision kernel is compiled for.
-enum ShapeCode : int { kPlane = 1, kSphere = 2, kBox = 3, kCapsule = 4, kCylinder = 5 };
+enum ShapeCode : int { kPlane = 1, kSphere = 2, kBox = 3, kCapsule = 4, kCylinder = 5, kGridShape = 6 };
 
 /// One distance constraint: |x_a - x_b| = rest.
 struct Constraint {
@@ -151,6 +152,8 @@ inline std::string preamble(const std::string& defines = {}) {
   s += define("DRAPE_SHAPE_BOX", kBox);
   s += define("DRAPE_SHAPE_CAPSULE", kCapsule);
   s += define("DRAPE_SHAPE_CYLINDER", kCylinder);
+  s += define("DRAPE_SHAPE_GRID", kGridShape);
+  s += define("DRAPE_B_GRID", kGrid);
   // A kernel compiled without a choice gets the plane and friction (so every kernel compiles on its own).
   s += "#ifndef DRAPE_SHAPE\n#define DRAPE_SHAPE DRAPE_SHAPE_PLANE\n#endif\n";
   s += "#ifndef DRAPE_FRICTION\n#define DRAPE_FRICTION 1\n#endif\n";

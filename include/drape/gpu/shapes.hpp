@@ -1,6 +1,6 @@
 #pragma once
 // The solids' fields as the collision kernels read them: each shape's compiled field (Sdf<Shape, float>, in the
-// cloth's local frame) packed into the four vec4s of the `shape` uniform (layout::kShape), in the order
+// cloth's local frame) packed into the five vec4s of the `shape` uniform (layout::kShape), in the order
 // shaders/common.glsl unpacks them, and the code that selects its GLSL twin (DRAPE_SHAPE).
 
 #include <drape/gpu/layout.hpp>
@@ -16,7 +16,7 @@ namespace drape::gpu {
 template <class Shape>
 inline constexpr bool kGpuShape = std::is_same_v<Shape, Plane> || std::is_same_v<Shape, Sphere> ||
                                   std::is_same_v<Shape, Box> || std::is_same_v<Shape, Capsule> ||
-                                  std::is_same_v<Shape, Cylinder>;
+                                  std::is_same_v<Shape, Cylinder> || std::is_same_v<Shape, MeshShape>;
 
 template <class Shape> constexpr layout::ShapeCode shapeCode() {
   static_assert(kGpuShape<Shape>, "this shape has no GPU field yet");
@@ -24,7 +24,8 @@ template <class Shape> constexpr layout::ShapeCode shapeCode() {
   else if constexpr (std::is_same_v<Shape, Sphere>) return layout::kSphere;
   else if constexpr (std::is_same_v<Shape, Box>) return layout::kBox;
   else if constexpr (std::is_same_v<Shape, Capsule>) return layout::kCapsule;
-  else return layout::kCylinder;
+  else if constexpr (std::is_same_v<Shape, Cylinder>) return layout::kCylinder;
+  else return layout::kGridShape;
 }
 
 /// The #define that compiles a collision kernel for the shape.
@@ -32,20 +33,21 @@ template <class Shape> std::string shapeDefine() {
   return "#define DRAPE_SHAPE " + std::to_string(int(shapeCode<Shape>())) + "\n";
 }
 
-using PackedShape = std::array<Eigen::Vector4f, 4>;
+using PackedShape = std::array<Eigen::Vector4f, 5>;
 
 inline PackedShape packShape(const Sdf<Plane, float>& f) {
   return {Eigen::Vector4f(f.normal.x(), f.normal.y(), f.normal.z(), f.offset), Eigen::Vector4f::Zero(),
-          Eigen::Vector4f::Zero(), Eigen::Vector4f::Zero()};
+          Eigen::Vector4f::Zero(), Eigen::Vector4f::Zero(), Eigen::Vector4f::Zero()};
 }
 inline PackedShape packShape(const Sdf<Sphere, float>& f) {
   return {Eigen::Vector4f(f.centre.x(), f.centre.y(), f.centre.z(), f.radius), Eigen::Vector4f::Zero(),
-          Eigen::Vector4f::Zero(), Eigen::Vector4f::Zero()};
+          Eigen::Vector4f::Zero(), Eigen::Vector4f::Zero(), Eigen::Vector4f::Zero()};
 }
 /// The rows of a world-to-shape rotation, each with one scalar in w.
 inline PackedShape packRotation(const Vec3<float>& centre, float w0, const Mat3<float>& toLocal, float w1, float w2,
                                 float w3) {
   PackedShape p;
+  p[4].setZero();
   p[0] << centre, w0;
   p[1] << toLocal.row(0).transpose(), w1;
   p[2] << toLocal.row(1).transpose(), w2;
@@ -59,15 +61,25 @@ inline PackedShape packShape(const Sdf<Capsule, float>& f) {
   const Vec3<float> side = f.axis.unitOrthogonal();  // the gradient on the core segment, as the CPU takes it
   return {Eigen::Vector4f(f.centre.x(), f.centre.y(), f.centre.z(), f.halfHeight),
           Eigen::Vector4f(f.axis.x(), f.axis.y(), f.axis.z(), f.radius), Eigen::Vector4f(side.x(), side.y(), side.z(), 0),
-          Eigen::Vector4f::Zero()};
+          Eigen::Vector4f::Zero(), Eigen::Vector4f::Zero()};
 }
 inline PackedShape packShape(const Sdf<Cylinder, float>& f) {
   return packRotation(f.centre, f.radius, f.toLocal, f.halfHeight, 0, 0);
 }
 
+/// A distance grid: the rotation and centre, the grid's lower corner, cell size and node counts (its nodes go
+/// to their own buffer, layout::kGrid).
+inline PackedShape packShape(const Sdf<MeshShape, float>& f) {
+  const auto& s = f.sample;
+  PackedShape p = packRotation(f.centre.head<3>(), s.cellSize, f.toLocal.topLeftCorner<3, 3>(), s.lower[0], s.lower[1],
+                               s.lower[2]);
+  p[4] = Eigen::Vector4f(s.invCellSize, float(s.count[0]), float(s.count[1]), float(s.count[2]));
+  return p;
+}
+
 /// Sets a program's `shape` uniform.
 inline void setShape(GLuint program, const PackedShape& p) {
-  glProgramUniform4fv(program, layout::kShape, 4, p[0].data());  // the four vec4s lie one after another
+  glProgramUniform4fv(program, layout::kShape, GLsizei(p.size()), p[0].data());  // the vec4s lie one after another
 }
 
 }  // namespace drape::gpu

@@ -5,11 +5,13 @@
 //
 // What it runs so far, for float: predict, the distance constraints (stretch, shear, bending; one dispatch per
 // colour, all iterations, with the XPBD multipliers when several passes meet a compliant set), the velocity
-// update, and against one solid (a plane, sphere, box, capsule or cylinder, static or kinematic) the repulsion
+// update, and against one solid (a plane, sphere, box, capsule, cylinder or grid field from a mesh, static or
+// kinematic) the repulsion
 // region and the improved and vertex-only collision methods: the vertex pass, the face pass (bounding-sphere
-// cull and cutting-plane search for the deepest point, one dispatch per colour of faces that share no vertex),
+// cull and the search for the deepest point, cutting planes on convex fields and projected gradient descent on a
+// grid's, one dispatch per colour of faces that share no vertex),
 // the velocity split with Coulomb friction, and propagation ring by ring; and the local origin following the
-// cloth, as on the CPU; fixed vertices (inverse mass 0) and pins with targets. Hulls and grid fields, several
+// cloth, as on the CPU; fixed vertices (inverse mass 0) and pins with targets. Hulls, several
 // solids, the baseline method and the rigid-body coupling are CPU-only for now: asking for one is an error that
 // says so, so a scene never silently loses it.
 //
@@ -140,11 +142,12 @@ class Solver {
   /// Adds the solid. The GPU takes one solid, static or kinematic, for now; its kernels are compiled for its
   /// shape here.
   template <class Shape> Index addSolid(const Solid<Shape>& solid) {
-    static_assert(kHasShape<Shape>, "the GPU solver has no field for this shape yet (hulls and grids are CPU-only)");
+    static_assert(kHasShape<Shape>, "the GPU solver has no field for this shape yet (hulls are CPU-only)");
     drape::detail::validateSolid(solid, "solid");
     drape::detail::require(solid_.index() == 0, "the GPU solver takes one solid for now (this would be the second)");
     checkSupported(solid);
     compileFor<Shape>();
+    uploadGrid(solid);
     solid_ = solid;
     return 0;
   }
@@ -160,6 +163,7 @@ class Solver {
                            "solid index " + std::to_string(k) + " out of range");
     drape::detail::validateSolid(s, "solid " + std::to_string(k));
     checkSupported(s);
+    uploadGrid(s);
     solid_ = s;
   }
   /// Calls f(const CompiledSolid<Shape, float>&) for every solid, compiled at the current local origin (for the
@@ -283,6 +287,19 @@ class Solver {
     if constexpr (!Sdf<Shape, float>::kLinear) collideFaces_ = Program("collide_faces", shaders::collide_faces, define);
   }
 
+  /// A mesh solid's grid nodes to the GPU (once per grid; other shapes have none).
+  template <class Shape> void uploadGrid(const Solid<Shape>& s) {
+    if constexpr (std::is_same_v<Shape, MeshShape>) {
+      if (s.shape.grid == uploadedGrid_) return;
+      context_->makeCurrent();
+      const auto& nodes = s.shape.grid->nodes;
+      std::vector<layout::Vertex> v(nodes.size());
+      for (std::size_t i = 0; i < v.size(); ++i) v[i] = {nodes[i].x(), nodes[i].y(), nodes[i].z(), nodes[i].w()};
+      grid_.assign(v);
+      uploadedGrid_ = s.shape.grid;
+    }
+  }
+
   void uploadFaces() {
     const FaceColours coloured = gpu::colourFaces(asset_->triangles, vertexCount());
     faceColourOffsets_ = coloured.offsets;
@@ -356,6 +373,7 @@ class Solver {
     neighbourOffsets_.bind(layout::kNeighbourOffsets);
     neighbours_.bind(layout::kNeighbours);
     rings_.bind(layout::kPropagation);
+    if (grid_.size() > 0) grid_.bind(layout::kGrid);
 
     // 0. repulsion (phase 1), only for a solid that has a region
     if (repulsionRadius > 0) {
@@ -501,7 +519,11 @@ class Solver {
   mutable ClothState<float> state_;  ///< the CPU copy: current when fresh_
   mutable bool fresh_ = true;
   /// The one solid, posed as of the last substep (monostate: none).
-  std::variant<std::monostate, Solid<Plane>, Solid<Sphere>, Solid<Box>, Solid<Capsule>, Solid<Cylinder>> solid_;
+  std::variant<std::monostate, Solid<Plane>, Solid<Sphere>, Solid<Box>, Solid<Capsule>, Solid<Cylinder>,
+               Solid<MeshShape>>
+      solid_;
+  Buffer<layout::Vertex> grid_;  ///< a mesh solid's distance grid nodes
+  std::shared_ptr<const DistanceGrid> uploadedGrid_;  ///< the grid whose nodes grid_ holds
   Program predict_, solve_, update_, respond_, respondFriction_, propagate_, centre_, translate_, pinKernel_;
   std::vector<Pin> pins_;  ///< targets in world coordinates (uploaded each substep, in the local frame then)
   Buffer<layout::PinSlot> pinSlots_;
