@@ -3,6 +3,7 @@
 // cloth's local frame) packed into the five vec4s of the `shape` uniform (layout::kShape), in the order
 // shaders/common.glsl unpacks them, and the code that selects its GLSL twin (DRAPE_SHAPE).
 
+#include <drape/gpu/context.hpp>  // GL
 #include <drape/gpu/layout.hpp>
 #include <drape/sdf/solid.hpp>
 
