@@ -5,8 +5,8 @@
 // search for the deepest point (the field of a convex solid is convex along the face, so each tangent plane
 // bounds it from below and the search stops once the best value is certified), and where that point is closer
 // than the thickness, the face's vertices move along the normal, weighted by barycentric weight and inverse
-// mass, to carry it to the thickness. The moves are recorded in the vertices' contacts as the CPU merges a
-// contact with the same surface: the latest normal and solid velocity, the corrections summed.
+// mass, to carry it to the thickness. The moves are recorded in the vertices' contacts (recordContact, as the
+// CPU records them).
 //
 // The CPU visits every face in index order; here the colours go in turn and the faces of one colour at once,
 // which is another order of the same Gauss-Seidel pass: a colour's faces on their own give the CPU's bits.
@@ -21,6 +21,7 @@ layout(location = DRAPE_U_SOLID_CENTRE) uniform vec3 centre;
 layout(location = DRAPE_U_SOLID_LINEAR) uniform vec3 linearVelocity;
 layout(location = DRAPE_U_SOLID_ANGULAR) uniform vec3 angularVelocity;
 layout(location = DRAPE_U_PGD_ITERATIONS) uniform int maxIterations;
+layout(location = DRAPE_U_FRICTION) uniform vec2 friction;  // static, dynamic
 
 const int kMaxCuts = 16;
 const int kMaxVertices = 2 * kMaxCuts + 6;
@@ -193,8 +194,7 @@ void main() {
     precise const vec3 moved = xv.xyz + dn * qn;
     x[vi] = vec4(moved, xv.w);
     Contact ct = contacts[vi];
-    ct.normal = vec4(qn, (ct.solidVelocity.w != 0.0 ? ct.normal.w : 0.0) + dn);
-    ct.solidVelocity = vec4(solidVelocityAt(moved, centre, linearVelocity, angularVelocity), 1.0);
+    recordContact(ct, moved, qn, dn, solidVelocityAt(moved, centre, linearVelocity, angularVelocity), friction, -1);
     contacts[vi] = ct;
   }
 }

@@ -1,34 +1,44 @@
-// DESIGN 4, the vertex pass (the CPU twin: projectVertexContactsAs in include/drape/collision/response.hpp): a
-// free vertex closer to the solid than the thickness moves out along the field's gradient to the thickness, and
-// its contact is recorded for the response: normal and correction, and the solid's velocity at the placed
-// point. Every vertex writes its own record each substep (live or not), so nothing is cleared.
+// DESIGN 4, the vertex pass (the CPU twin: projectVertexContactsAs in include/drape/collision/response.hpp) for
+// one solid: a free vertex closer to the solid than the thickness (by more than the slack) moves out along the
+// field's gradient to the thickness, and its contact is recorded for the response (recordContact): normal and
+// correction, the solid's velocity at the placed point, its friction. The substep's first pass (fresh) starts
+// every vertex's record, so nothing is cleared. In a settle pass (pass >= 0) the dispatch does nothing unless
+// the pass before found a contact, and a contact found marks this pass's flag: the CPU's loop that stops once a
+// pass finds none, without reading anything back.
 layout(local_size_x = DRAPE_WORKGROUP) in;
 layout(std430, binding = DRAPE_B_POSITIONS) buffer Positions { vec4 x[]; };
-layout(std430, binding = DRAPE_B_CONTACTS) writeonly buffer Contacts { Contact contacts[]; };
+layout(std430, binding = DRAPE_B_CONTACTS) buffer Contacts { Contact contacts[]; };
+layout(std430, binding = DRAPE_B_FLAGS) buffer Flags { uint flags[]; };
 layout(location = DRAPE_U_COUNT) uniform uint count;
 layout(location = DRAPE_U_THICKNESS) uniform float thickness;
 layout(location = DRAPE_U_SOLID_CENTRE) uniform vec3 centre;
 layout(location = DRAPE_U_SOLID_LINEAR) uniform vec3 linearVelocity;
 layout(location = DRAPE_U_SOLID_ANGULAR) uniform vec3 angularVelocity;
+layout(location = DRAPE_U_FRICTION) uniform vec2 friction;  // static, dynamic
+layout(location = DRAPE_U_SLACK) uniform float slack;
+layout(location = DRAPE_U_PASS) uniform int pass;
+layout(location = DRAPE_U_FRESH) uniform uint fresh;
 
 void main() {
   const uint i = gl_GlobalInvocationID.x;
   if (i >= count) return;
+  if (pass > 0 && flags[pass - 1] == 0u) return;
   const vec4 xi = x[i];
-  Contact c;
-  c.normal = vec4(0.0);
-  c.solidVelocity = vec4(0.0);  // w = 0: no contact
-  c.normalDv = vec4(0.0);
+  bool found = false;
   if (xi.w != 0.0) {
     vec3 n;
     const float phi = sdf(xi.xyz, n);
-    if (phi < thickness) {
+    precise const float limit = thickness - slack;
+    if (phi < limit) {
       precise const float dn = thickness - phi;
       precise const vec3 p = xi.xyz + dn * n;
       x[i] = vec4(p, xi.w);
-      c.normal = vec4(n, dn);
-      c.solidVelocity = vec4(solidVelocityAt(p, centre, linearVelocity, angularVelocity), 1.0);
+      Contact c = fresh != 0u ? emptyContact() : contacts[i];
+      recordContact(c, p, n, dn, solidVelocityAt(p, centre, linearVelocity, angularVelocity), friction, -1);
+      contacts[i] = c;
+      found = true;
     }
   }
-  contacts[i] = c;
+  if (!found && fresh != 0u) contacts[i].slots = uvec4(0u);
+  if (found && pass >= 0) flags[pass] = 1u;
 }

@@ -23,6 +23,150 @@ vec3 rotateBack(vec3 r0, vec3 r1, vec3 r2, vec3 v) {
   return vec3(dot3(vec3(r0.x, r1.x, r2.x), v), dot3(vec3(r0.y, r1.y, r2.y), v), dot3(vec3(r0.z, r1.z, r2.z), v));
 }
 
+// --- contact records (the CPU twin: ContactBuffer in include/drape/collision/response.hpp) ---------------------
+
+// Contacts whose normals agree within this cosine share a slot (ContactBuffer::kMergeCos).
+const float kMergeCos = 0.95;
+
+// An empty record: no slot taken.
+Contact emptyContact() {
+  Contact c;
+  for (int k = 0; k < DRAPE_CONTACT_SLOTS; ++k) c.normal[k] = c.velocity[k] = c.friction[k] = vec4(0.0);
+  c.body = ivec4(-1);
+  c.slots = uvec4(0u);
+  c.normalDv = vec4(0.0);
+  return c;
+}
+
+// Records that the vertex was placed at x, dn along n, out of a solid whose velocity there is vc
+// (ContactBuffer::record and recordMore): a new direction takes a free slot; the same surface seen again (the
+// normals within kMergeCos) takes the latest normal and placement; a direction that finds every slot taken joins
+// the closest, whose normal stays, and marks the record overflowed. The corrections add up.
+void recordContact(inout Contact c, vec3 x, vec3 n, float dn, vec3 vc, vec2 friction, int body) {
+  const uint count = c.slots.x;
+  if (count == 0u) {
+    c.slots = uvec4(1u, 0u, 0u, 0u);
+    c.normal[0] = vec4(n, dn);
+    c.velocity[0] = vec4(vc, dot3(n, x));
+    c.friction[0] = vec4(friction, 0.0, 0.0);
+    c.body[0] = body;
+    return;
+  }
+  int best = -1;
+  float bestCos = kMergeCos;
+  for (int k = 0; k < int(count); ++k) {
+    const float cs = dot3(c.normal[k].xyz, n);
+    if (cs >= bestCos) best = k, bestCos = cs;
+  }
+  if (best < 0 && count < uint(DRAPE_CONTACT_SLOTS)) {
+    c.normal[count] = vec4(n, dn);
+    c.velocity[count] = vec4(vc, dot3(n, x));
+    c.friction[count] = vec4(friction, 0.0, 0.0);
+    c.body[count] = body;
+    c.slots.x = count + 1u;
+    return;
+  }
+  if (best < 0) {
+    c.slots.y = 1u;
+    bestCos = -2.0;
+    for (int k = 0; k < DRAPE_CONTACT_SLOTS; ++k) {
+      const float cs = dot3(c.normal[k].xyz, n);
+      if (cs > bestCos) best = k, bestCos = cs;
+    }
+  }
+  precise const float total = c.normal[best].w + dn;
+  if (bestCos >= kMergeCos) {
+    c.normal[best] = vec4(n, total);
+    c.velocity[best] = vec4(vc, dot3(n, x));
+    c.body[best] = body;
+  } else {
+    c.normal[best].w = total;
+    c.velocity[best] = vec4(vc, max(c.velocity[best].w, dot3(c.normal[best].xyz, x)));
+  }
+}
+
+// The point nearest to y0 in {y : n_k . y >= b_k} for up to three half-spaces (the CPU twin: nearestInHalfSpaces
+// in include/drape/collision/response.hpp): the nearest feasible point among the projections onto every subset of
+// the planes, within kReach times the total violation (or minReach); else the least-squares compromise by
+// Jacobi steps from `fallback`.
+const float kReach = 4.0;
+const int kLeastSquaresSteps = 16;
+
+bool feasibleIn(vec3 n[DRAPE_CONTACT_SLOTS], float b[DRAPE_CONTACT_SLOTS], int count, vec3 y) {
+  for (int k = 0; k < count; ++k) {
+    precise const float bound = b[k] - 1e-6 * max(1.0, abs(b[k]));
+    if (dot3(n[k], y) < bound) return false;
+  }
+  return true;
+}
+
+vec3 nearestInHalfSpaces(vec3 n[DRAPE_CONTACT_SLOTS], float b[DRAPE_CONTACT_SLOTS], int count, vec3 y0,
+                         vec3 fallback, float minReach) {
+  if (feasibleIn(n, b, count, y0)) return y0;
+  precise float violation = 0.0;
+  for (int k = 0; k < count; ++k) violation = violation + max(b[k] - dot3(n[k], y0), 0.0);
+  precise const float reach = max(kReach * violation, minReach);
+  precise const float reach2 = reach * reach;
+  vec3 best = y0;
+  bool found = false;
+  float bestDist = 0.0;
+  vec3 candidate[7];
+  int candidates = 0;
+  for (int k = 0; k < count; ++k) {
+    precise const vec3 y = y0 + (b[k] - dot3(n[k], y0)) * n[k];
+    candidate[candidates++] = y;
+  }
+  for (int j = 0; j < count; ++j)
+    for (int k = j + 1; k < count; ++k) {  // the line where planes j and k meet
+      precise const float ab = dot3(n[j], n[k]);
+      precise const float det = 1.0 - ab * ab;
+      if (det < 1e-6) continue;
+      precise const float ra = b[j] - dot3(n[j], y0), rb = b[k] - dot3(n[k], y0);
+      precise const vec3 y = (y0 + ((ra - ab * rb) / det) * n[j]) + ((rb - ab * ra) / det) * n[k];
+      candidate[candidates++] = y;
+    }
+  if (count == 3) {  // the corner where all three meet: Gaussian elimination with partial pivoting
+    precise const float d = n[0].x * (n[1].y * n[2].z - n[1].z * n[2].y) -
+                            n[1].x * (n[0].y * n[2].z - n[0].z * n[2].y) +
+                            n[2].x * (n[0].y * n[1].z - n[0].z * n[1].y);
+    if (abs(d) > 1e-4) {
+      vec4 m[3] = vec4[3](vec4(n[0], b[0]), vec4(n[1], b[1]), vec4(n[2], b[2]));
+      for (int col = 0; col < 3; ++col) {
+        int pivot = col;
+        for (int r = col + 1; r < 3; ++r)
+          if (abs(m[r][col]) > abs(m[pivot][col])) pivot = r;
+        const vec4 t = m[col];
+        m[col] = m[pivot];
+        m[pivot] = t;
+        for (int r = col + 1; r < 3; ++r) {
+          precise const float f = m[r][col] / m[col][col];
+          precise const vec4 row = m[r] - f * m[col];
+          m[r] = row;
+        }
+      }
+      precise const float z = m[2].w / m[2].z;
+      precise const float yv = (m[1].w - m[1].z * z) / m[1].y;
+      precise const float xv = (m[0].w - (m[0].y * yv + m[0].z * z)) / m[0].x;
+      candidate[candidates++] = vec3(xv, yv, z);
+    }
+  }
+  for (int c = 0; c < candidates; ++c) {
+    precise const vec3 d = candidate[c] - y0;
+    const float dist = dot3(d, d);
+    if ((!found || dist < bestDist) && dist <= reach2 && feasibleIn(n, b, count, candidate[c]))
+      best = candidate[c], bestDist = dist, found = true;
+  }
+  if (found) return best;
+  best = fallback;
+  for (int it = 0; it < kLeastSquaresSteps; ++it) {
+    precise vec3 stepV = vec3(0.0);
+    for (int k = 0; k < count; ++k) stepV = stepV + max(b[k] - dot3(n[k], best), 0.0) * n[k];
+    precise const vec3 next = best + stepV / float(count);
+    best = next;
+  }
+  return best;
+}
+
 // The solid's field, packed by drape::gpu::packShape (include/drape/gpu/shapes.hpp).
 layout(location = DRAPE_U_SHAPE) uniform vec4 shape[5];
 

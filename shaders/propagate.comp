@@ -17,7 +17,7 @@ layout(location = DRAPE_U_WEIGHT) uniform float weight;
 void main() {
   const uint j = gl_GlobalInvocationID.x;
   if (j >= count) return;
-  if (contacts[j].solidVelocity.w != 0.0 || x[j].w == 0.0) return;
+  if (contacts[j].slots.x != 0u || x[j].w == 0.0) return;
   if (ring > 1u && rings[j].reached != 0u) return;  // settled in an earlier ring
   precise vec3 normalSum = vec3(0.0), velocitySum = vec3(0.0);
   precise float amountSum = 0.0;
@@ -26,12 +26,14 @@ void main() {
     const uint i = neighbours[k];
     if (ring == 1u) {
       const Contact c = contacts[i];
-      if (c.solidVelocity.w == 0.0 || c.normalDv.x <= 0.0) continue;
-      // ContactBuffer::normal with one slot: the normal weighted by its correction, normalised.
-      precise const vec3 weighted = c.normal.w * c.normal.xyz;
+      if (c.slots.x == 0u || c.normalDv.x <= 0.0) continue;
+      // ContactBuffer::normal: the slots' normals weighted by their corrections, normalised (the first slot's if
+      // none); ContactBuffer::solidVelocity: the first slot's.
+      precise vec3 weighted = vec3(0.0);
+      for (uint k = 0u; k < c.slots.x; ++k) weighted = weighted + c.normal[k].w * c.normal[k].xyz;
       precise const float len = length3(weighted);
-      normalSum = normalSum + (len > 0.0 ? weighted / len : c.normal.xyz);
-      velocitySum = velocitySum + c.solidVelocity.xyz;
+      normalSum = normalSum + (len > 0.0 ? weighted / len : c.normal[0].xyz);
+      velocitySum = velocitySum + c.velocity[0].xyz;
       amountSum = amountSum + c.normalDv.x;
     } else {
       const Ring r = rings[i];

@@ -1,9 +1,11 @@
 // DESIGN 4, the velocity split (the CPU twin: respondContacts and applyPositionFriction in
-// include/drape/collision/response.hpp), per contact vertex, relative to the solid: an approaching normal
-// velocity is removed, a separating one damped by normalDamping, the tangential one kept minus Coulomb
-// friction. Friction acts on the position (the tangential displacement of the substep within mu_s times the
-// correction is undone: stick) and takes as much from the velocity as from the position (slip). Compiled with
-// DRAPE_FRICTION 0 for a scene without friction, which then pays nothing for it.
+// include/drape/collision/response.hpp), per contact vertex and each surface it touches, relative to that solid:
+// an approaching normal velocity is removed, a separating one damped by normalDamping, the tangential one kept
+// minus Coulomb friction with the slot's coefficients. Friction acts on the position (the tangential
+// displacement of the substep within mu_s times the correction is undone: stick) and takes as much from the
+// velocity as from the position (slip). A vertex touching several surfaces then gets the nearest velocity that
+// approaches none of them (nearestInHalfSpaces). Compiled with DRAPE_FRICTION 0 for a scene without friction,
+// which then pays nothing for it.
 layout(local_size_x = DRAPE_WORKGROUP) in;
 layout(std430, binding = DRAPE_B_POSITIONS) buffer Positions { vec4 x[]; };
 layout(std430, binding = DRAPE_B_VELOCITIES) buffer Velocities { vec4 v[]; };
@@ -13,36 +15,61 @@ layout(location = DRAPE_U_COUNT) uniform uint count;
 layout(location = DRAPE_U_STEP) uniform float h;
 layout(location = DRAPE_U_INVERSE_STEP) uniform float invH;
 layout(location = DRAPE_U_NORMAL_DAMPING) uniform float normalDamping;
-layout(location = DRAPE_U_FRICTION) uniform vec2 friction;  // static, dynamic
 
 void main() {
   const uint i = gl_GlobalInvocationID.x;
   if (i >= count) return;
   const Contact c = contacts[i];
-  if (c.solidVelocity.w == 0.0) return;
-  const vec3 n = c.normal.xyz, vc = c.solidVelocity.xyz;
-  const float correction = c.normal.w;
-  precise const vec3 vRel = v[i].xyz - vc;
-  precise const float vn = dot3(n, vRel);
-  precise vec3 vt = vRel - vn * n;
-  precise const float vnNew = vn < 0.0 ? 0.0 : vn * (1.0 - normalDamping);
+  const int slots = int(c.slots.x);
+  if (slots == 0) return;
+  vec3 vi = v[i].xyz;
 #if DRAPE_FRICTION
-  const vec4 xi = x[i];
-  precise const vec3 disp = (xi.xyz - x0[i].xyz) - h * vc;
-  precise const vec3 dispT = disp - dot3(n, disp) * n;
-  precise const float slip = length3(dispT);
-  if (slip <= friction.x * correction) {
-    x[i] = vec4(xi.xyz - dispT, xi.w);
-    vt = vec3(0.0);
-  } else {
-    precise const float undo = min(1.0, friction.y * correction / slip);
-    x[i] = vec4(xi.xyz - undo * dispT, xi.w);
-    precise const float speed = length3(vt);
-    precise const float slow = friction.y * correction * invH;
-    vt = vt * (speed > slow ? (speed - slow) / speed : 0.0);
-  }
+  const vec4 xw = x[i];
+  vec3 xi = xw.xyz;
+  const vec3 start = x0[i].xyz;
 #endif
-  precise const vec3 vNew = vc + vnNew * n + vt;
-  v[i] = vec4(vNew, 0.0);
-  contacts[i].normalDv = vec4(max(vnNew - vn, 0.0), 0.0, 0.0, 0.0);
+  precise float dvnSum = 0.0;
+  for (int k = 0; k < slots; ++k) {
+    const vec3 n = c.normal[k].xyz, vc = c.velocity[k].xyz;
+    precise const vec3 vRel = vi - vc;
+    precise const float vn = dot3(n, vRel);
+    precise vec3 vt = vRel - vn * n;
+    precise const float vnNew = vn < 0.0 ? 0.0 : vn * (1.0 - normalDamping);
+#if DRAPE_FRICTION
+    const float correction = c.normal[k].w;
+    const vec2 mu = c.friction[k].xy;  // static, dynamic
+    precise const vec3 disp = (xi - start) - h * vc;
+    precise const vec3 dispT = disp - dot3(n, disp) * n;
+    precise const float slip = length3(dispT);
+    if (slip <= mu.x * correction) {
+      precise const vec3 stuck = xi - dispT;
+      xi = stuck;
+      vt = vec3(0.0);
+    } else {
+      precise const float undo = min(1.0, mu.y * correction / slip);
+      precise const vec3 slid = xi - undo * dispT;
+      xi = slid;
+      precise const float speed = length3(vt);
+      precise const float slow = mu.y * correction * invH;
+      vt = vt * (speed > slow ? (speed - slow) / speed : 0.0);
+    }
+#endif
+    precise const vec3 vNew = (vc + vnNew * n) + vt;
+    vi = vNew;
+    dvnSum = dvnSum + max(vnNew - vn, 0.0);
+  }
+  if (slots > 1) {
+    vec3 normals[DRAPE_CONTACT_SLOTS];
+    float bounds[DRAPE_CONTACT_SLOTS];
+    for (int k = 0; k < DRAPE_CONTACT_SLOTS; ++k) {
+      normals[k] = c.normal[k].xyz;
+      bounds[k] = dot3(c.normal[k].xyz, c.velocity[k].xyz);
+    }
+    vi = nearestInHalfSpaces(normals, bounds, slots, vi, vi, length3(vi));
+  }
+#if DRAPE_FRICTION
+  x[i] = vec4(xi, xw.w);
+#endif
+  v[i] = vec4(vi, 0.0);
+  contacts[i].normalDv = vec4(dvnSum, 0.0, 0.0, 0.0);
 }

@@ -5,6 +5,8 @@
 
 #include <drape/drape.hpp>
 
+#include <drape/rigid/coupled.hpp>
+
 #include <catch2/catch.hpp>
 
 #include <cstring>
@@ -259,7 +261,11 @@ TEST_CASE("the GPU solver names what it does not run yet", "[gpu]") {
   CHECK_THROWS_WITH(drape::gpu::Solver(drape::test::gpuContext(), parts.asset, baseline), Catch::Contains("baseline"));
   drape::gpu::Solver gpu(drape::test::gpuContext(), parts.asset, parts.settings);
   gpu.addSolid(parts.slope);
-  CHECK_THROWS_WITH(gpu.addSolid(parts.slope), Catch::Contains("one solid"));
+  drape::RigidWorld world;
+  drape::BodyDesc ball;
+  ball.shape = drape::Sphere{0.1};
+  const int b = world.add(ball);
+  CHECK_THROWS_WITH(drape::addCoupledBody(gpu, world, b), Catch::Contains("dynamic"));
   CHECK_THROWS_WITH(gpu.setSettings(baseline), Catch::Contains("baseline"));
   CHECK(gpu.settings().collisionMethod == drape::CollisionMethod::Improved);
 }

@@ -24,7 +24,7 @@ enum Binding : unsigned {
   kConstraints = 4,  ///< Constraint per distance constraint, colour by colour
   kLambdas = 5,      ///< float per distance constraint: the XPBD multipliers of the current substep
   kStart = 6,        ///< vec4 per vertex: the position at the start of the substep (friction reads it)
-  kContacts = 7,     ///< Contact per vertex: this substep's contact with the solid
+  kContacts = 7,     ///< Contact per vertex: this substep's contacts with the solids (up to three surfaces)
   kNeighbourOffsets = 8,  ///< uint per vertex + 1: where each vertex's neighbours start in kNeighbours
   kNeighbours = 9,        ///< uint: the neighbours of every vertex (the asset's vertexNeighbours, in order)
   kPropagation = 10,      ///< Ring per vertex: what a propagation ring passed to the vertex
@@ -33,6 +33,7 @@ enum Binding : unsigned {
   kPins = 13,             ///< PinSlot per pin
   kPinLambdas = 14,       ///< float per pin: its XPBD multiplier in the current substep
   kGrid = 15,             ///< vec4 per node of a distance grid: (normal, distance), x fastest
+  kFlags = 16,            ///< uint per settle pass: 1 once a vertex pass of that pass found a contact
 };
 
 /// Uniform locations (set per dispatch with glProgramUniform*).
@@ -56,6 +57,9 @@ enum Uniform : int {
   kShift = 17,        ///< vec3: how far the local origin moves (m)
   kPgdIterations = 18,  ///< int: Settings::pgdIterations, the face search's most field evaluations
   kRepulsion = 19,      ///< vec2: 1 / the repulsion radius (1/m), and 1 for the smooth falloff (else 0)
+  kSlack = 20,          ///< float: a vertex pass leaves vertices within this of the thickness where they are (m)
+  kPass = 21,           ///< int: the settle pass a dispatch belongs to (0-3), -1 for the substep's first pass
+  kFresh = 22,          ///< uint: 1 for the substep's first vertex pass, which starts every vertex's record
   kShape = 32,  ///< vec4[5] (locations 32-36): the solid's field, packed by packShape (gpu/shapes.hpp)
 };
 
@@ -71,15 +75,25 @@ struct Constraint {
 static_assert(sizeof(Constraint) == 16 && alignof(Constraint) == 4);
 static_assert(offsetof(Constraint, a) == 0 && offsetof(Constraint, b) == 4 && offsetof(Constraint, rest) == 8);
 
-/// A vertex's contact of the substep: normal and correction (m) in `normal`, the solid's velocity at the
-/// contact in `solidVelocity` with w = 1 where there is a contact (0: none), and the normal velocity change
-/// the response made in normalDv.x (m/s), which propagation spreads.
+/// Up to this many differently facing surfaces per vertex and substep (ContactBuffer::kSlots).
+inline constexpr unsigned kContactSlots = 3;
+
+/// A vertex's contacts of the substep (the CPU's ContactBuffer record, ContactSlot per slot): per slot, the
+/// outward normal with the correction (m) in w, the solid's velocity at the contact with the slot's half-space
+/// offset n . x in w, and the static and dynamic friction coefficients; the coupled body per slot (-1: none);
+/// in `slots` the count (0: no contact) and 1 in y where a surface found every slot taken (the overflow); and in
+/// `normalDv.x` the normal velocity change the response made (m/s), which propagation spreads.
 struct Contact {
-  float normal[4];
-  float solidVelocity[4];
+  float normal[kContactSlots][4];
+  float velocity[kContactSlots][4];
+  float friction[kContactSlots][4];
+  std::int32_t body[4];
+  std::uint32_t slots[4];
   float normalDv[4];
 };
-static_assert(sizeof(Contact) == 48 && offsetof(Contact, solidVelocity) == 16 && offsetof(Contact, normalDv) == 32);
+static_assert(sizeof(Contact) == 192 && alignof(Contact) == 4);
+static_assert(offsetof(Contact, velocity) == 48 && offsetof(Contact, friction) == 96 && offsetof(Contact, body) == 144 &&
+              offsetof(Contact, slots) == 160 && offsetof(Contact, normalDv) == 176);
 
 /// What propagation ring `reached` passed to a vertex: the share it offers the next ring (amount, m/s), along
 /// the mean normal of its sources, relative to their mean solid velocity. reached is 0 before any ring.
@@ -154,11 +168,17 @@ inline std::string preamble(const std::string& defines = {}) {
   s += define("DRAPE_SHAPE_CYLINDER", kCylinder);
   s += define("DRAPE_SHAPE_GRID", kGridShape);
   s += define("DRAPE_B_GRID", kGrid);
+  s += define("DRAPE_B_FLAGS", kFlags);
+  s += define("DRAPE_U_SLACK", kSlack);
+  s += define("DRAPE_U_PASS", kPass);
+  s += define("DRAPE_U_FRESH", kFresh);
+  s += define("DRAPE_CONTACT_SLOTS", kContactSlots);
   // A kernel compiled without a choice gets the plane and friction (so every kernel compiles on its own).
   s += "#ifndef DRAPE_SHAPE\n#define DRAPE_SHAPE DRAPE_SHAPE_PLANE\n#endif\n";
   s += "#ifndef DRAPE_FRICTION\n#define DRAPE_FRICTION 1\n#endif\n";
   s += "struct Constraint { uint a; uint b; float rest; uint pad; };\n";
-  s += "struct Contact { vec4 normal; vec4 solidVelocity; vec4 normalDv; };\n";
+  s += "struct Contact { vec4 normal[DRAPE_CONTACT_SLOTS]; vec4 velocity[DRAPE_CONTACT_SLOTS]; "
+       "vec4 friction[DRAPE_CONTACT_SLOTS]; ivec4 body; uvec4 slots; vec4 normalDv; };\n";
   s += "struct Ring { vec4 normal; vec4 velocity; float amount; uint reached; uint pad0; uint pad1; };\n";
   s += "struct PinSlot { vec3 target; uint vertex; };\n";
   return s;

@@ -5,21 +5,20 @@
 //
 // What it runs so far, for float: predict, the distance constraints (stretch, shear, bending; one dispatch per
 // colour, all iterations, with the XPBD multipliers when several passes meet a compliant set), the velocity
-// update, and against one solid (a plane, sphere, box, capsule, cylinder or grid field from a mesh, static or
-// kinematic) the repulsion
-// region and the improved and vertex-only collision methods: the vertex pass, the face pass (bounding-sphere
-// cull and the search for the deepest point, cutting planes on convex fields and projected gradient descent on a
-// grid's, one dispatch per colour of faces that share no vertex),
-// the velocity split with Coulomb friction, and propagation ring by ring; and the local origin following the
-// cloth, as on the CPU; fixed vertices (inverse mass 0) and pins with targets. Hulls, several
-// solids, the baseline method and the rigid-body coupling are CPU-only for now: asking for one is an error that
-// says so, so a scene never silently loses it.
+// update, and against any number of solids (planes, spheres, boxes, capsules, cylinders and grid fields from
+// meshes, static or kinematic, visited in the CPU solver's order: by shape type, then as added) the repulsion
+// region and the improved and vertex-only collision methods: per solid the vertex pass and the face pass
+// (bounding-sphere cull and the search for the deepest point, cutting planes on convex fields and projected
+// gradient descent on a grid's, one dispatch per colour of faces that share no vertex), each vertex recording up
+// to three differently facing surfaces as the CPU does; where surfaces meet, the placement outside all of a
+// vertex's contact planes and the settle passes; the velocity split with Coulomb friction, per surface, then
+// reconciled; and propagation ring by ring; and the local origin following the cloth, as on the CPU; fixed
+// vertices (inverse mass 0) and pins with targets. Hulls, the baseline method and the rigid-body coupling are
+// CPU-only for now: asking for one is an error that says so, so a scene never silently loses it.
 //
-// Against a plane the GPU gives the CPU's bits on llvmpipe. Against a curved solid the face pass visits the
-// faces colour by colour where the CPU goes in index order (another order of the same Gauss-Seidel pass), and a
-// vertex keeps one contact record per substep where the CPU keeps up to three differently facing ones (a face
-// turned more than 18 degrees from the vertex's own contact); the two then agree on the scene's invariants, not
-// bit for bit.
+// Against planes the GPU gives the CPU's bits on llvmpipe. Against a curved solid the face pass visits the
+// faces colour by colour where the CPU goes in index order (another order of the same Gauss-Seidel pass); the
+// two then agree on the scene's invariants, not bit for bit.
 //
 // Each kernel in shaders/ has its CPU twin named in its header comment; tests/gpu/ compares each pair.
 
@@ -36,10 +35,9 @@
 #include <algorithm>
 #include <array>
 #include <memory>
-#include <optional>
 #include <string>
+#include <tuple>
 #include <type_traits>
-#include <variant>
 #include <vector>
 
 namespace drape::gpu {
@@ -102,7 +100,8 @@ class Solver {
         propagate_("propagate", shaders::propagate),
         centre_("centre", shaders::centre),
         translate_("translate", shaders::translate),
-        pinKernel_("pins", shaders::pins) {
+        pinKernel_("pins", shaders::pins),
+        settle_("settle", shaders::settle) {
     // The three sets, colour by colour, in one buffer: set s's colour c starts at offset_[s] + colourOffsets[c].
     std::vector<layout::Constraint> constraints;
     const DistanceSet<float>* sets[3] = {&asset_->stretch, &asset_->shear, &asset_->bending};
@@ -124,6 +123,7 @@ class Solver {
     contacts_.assign(std::vector<layout::Contact>(zero.size(), layout::Contact{}));
     rings_.assign(std::vector<layout::Ring>(zero.size(), layout::Ring{}));
     reduction_.assign(std::vector<layout::Vertex>(1));
+    flags_.assign(std::vector<std::uint32_t>(kSettlePasses, 0u));
     const Adjacency& around = asset_->vertexNeighbours;
     neighbourOffsets_.assign(std::vector<std::uint32_t>(around.offsets.begin(), around.offsets.end()));
     neighbours_.assign(std::vector<std::uint32_t>(around.items.begin(), around.items.end()));
@@ -138,43 +138,50 @@ class Solver {
     settings_ = s;
   }
 
-  // --- solids (one, a plane, sphere, box, capsule or cylinder, for now) ---------------------------------------
-  /// Adds the solid. The GPU takes one solid, static or kinematic, for now; its kernels are compiled for its
-  /// shape here.
+  // --- solids ------------------------------------------------------------------------------------------------
+  /// Adds the solid (static or kinematic) and returns its index among the solids of its shape type, as the CPU
+  /// solver does. The kernels for its shape are compiled on the first solid of that shape, a mesh's grid nodes
+  /// uploaded on the first solid with that grid.
   template <class Shape> Index addSolid(const Solid<Shape>& solid) {
     static_assert(kHasShape<Shape>, "the GPU solver has no field for this shape yet (hulls are CPU-only)");
     drape::detail::validateSolid(solid, "solid");
-    drape::detail::require(solid_.index() == 0, "the GPU solver takes one solid for now (this would be the second)");
     checkSupported(solid);
+    context_->makeCurrent();
     compileFor<Shape>();
     uploadGrid(solid);
-    solid_ = solid;
-    return 0;
+    auto& list = std::get<std::vector<Solid<Shape>>>(solids_);
+    list.push_back(solid);
+    return Index(list.size()) - 1;
   }
   template <class Shape> const Solid<Shape>& solid(Index k) const {
     static_assert(kHasShape<Shape>, "the GPU solver has no field for this shape yet");
-    const auto* held = std::get_if<Solid<Shape>>(&solid_);
-    drape::detail::require(held && k == 0, "solid index " + std::to_string(k) + " out of range");
-    return *held;
+    const auto& list = std::get<std::vector<Solid<Shape>>>(solids_);
+    drape::detail::require(k >= 0 && k < Index(list.size()), "solid index " + std::to_string(k) + " out of range");
+    return list[std::size_t(k)];
   }
   template <class Shape> void setSolid(Index k, const Solid<Shape>& s) {
     static_assert(kHasShape<Shape>, "the GPU solver has no field for this shape yet");
-    drape::detail::require(std::holds_alternative<Solid<Shape>>(solid_) && k == 0,
-                           "solid index " + std::to_string(k) + " out of range");
+    auto& list = std::get<std::vector<Solid<Shape>>>(solids_);
+    drape::detail::require(k >= 0 && k < Index(list.size()), "solid index " + std::to_string(k) + " out of range");
     drape::detail::validateSolid(s, "solid " + std::to_string(k));
     checkSupported(s);
+    context_->makeCurrent();
     uploadGrid(s);
-    solid_ = s;
+    list[std::size_t(k)] = s;
   }
   /// Calls f(const CompiledSolid<Shape, float>&) for every solid, compiled at the current local origin (for the
   /// metrics, which read the state back).
   template <class F> void forEachSolid(F&& f) const {
-    std::visit(
-        [&](const auto& held) {
-          if constexpr (!std::is_same_v<std::decay_t<decltype(held)>, std::monostate>)
-            f(drape::detail::compileSolid<std::decay_t<decltype(held.shape)>, float>(held, state_.origin));
+    std::apply(
+        [&](const auto&... lists) {
+          (
+              [&](const auto& list) {
+                using Shape = std::decay_t<decltype(list.front().shape)>;
+                for (const auto& held : list) f(drape::detail::compileSolid<Shape, float>(held, state_.origin));
+              }(lists),
+              ...);
         },
-        solid_);
+        solids_);
   }
 
   const ClothAsset<float>& asset() const { return *asset_; }
@@ -273,31 +280,46 @@ class Solver {
   }
 
  private:
+  /// One solid as this substep's kernels see it.
+  struct SolidPass {
+    layout::ShapeCode code;
+    PackedShape field;
+    SolidMotion<float> motion;
+    bool curved;  ///< has a face pass (a field that is not linear)
+    float repulsionRadius;
+    Falloff falloff;
+    const Buffer<layout::Vertex>* grid;  ///< a mesh solid's grid nodes, else null
+  };
   void checkVertex(Index i) const {
     drape::detail::require(i >= 0 && i < vertexCount(), "vertex index " + std::to_string(i) + " out of range [0, " +
                                                             std::to_string(vertexCount()) + ")");
   }
 
-  /// The solid's shape's vertex and face kernels (the face pass only for a curved one).
+  /// The shape's vertex, face and repulsion kernels (the face pass only for a curved one), once per shape type.
   template <class Shape> void compileFor() {
-    context_->makeCurrent();
+    ShapeKernels& k = kernels_[shapeCode<Shape>()];
+    if (k.ready) return;
     const std::string define = shapeDefine<Shape>();
-    collideVertices_ = Program("collide_vertices", shaders::collide_vertices, define);
-    repel_ = Program("repel", shaders::repel, define);
-    if constexpr (!Sdf<Shape, float>::kLinear) collideFaces_ = Program("collide_faces", shaders::collide_faces, define);
+    k.vertices = Program("collide_vertices", shaders::collide_vertices, define);
+    k.repel = Program("repel", shaders::repel, define);
+    if constexpr (!Sdf<Shape, float>::kLinear) k.faces = Program("collide_faces", shaders::collide_faces, define);
+    k.ready = true;
   }
 
   /// A mesh solid's grid nodes to the GPU (once per grid; other shapes have none).
   template <class Shape> void uploadGrid(const Solid<Shape>& s) {
     if constexpr (std::is_same_v<Shape, MeshShape>) {
-      if (s.shape.grid == uploadedGrid_) return;
-      context_->makeCurrent();
+      if (gridNodes(s.shape.grid)) return;
       const auto& nodes = s.shape.grid->nodes;
       std::vector<layout::Vertex> v(nodes.size());
       for (std::size_t i = 0; i < v.size(); ++i) v[i] = {nodes[i].x(), nodes[i].y(), nodes[i].z(), nodes[i].w()};
-      grid_.assign(v);
-      uploadedGrid_ = s.shape.grid;
+      grids_.push_back({s.shape.grid, Buffer<layout::Vertex>(v)});
     }
+  }
+  const Buffer<layout::Vertex>* gridNodes(const std::shared_ptr<const DistanceGrid>& grid) const {
+    for (const auto& g : grids_)
+      if (g.grid == grid) return &g.nodes;
+    return nullptr;
   }
 
   void uploadFaces() {
@@ -337,31 +359,83 @@ class Solver {
     state_.origin += shift;
   }
 
+  /// This substep's solids in the CPU solver's order (by shape type, then as added), each moved first if
+  /// kinematic (prepareSolids) and its field packed for the kernels (packShape).
+  void prepareSolids(double hd) {
+    passes_.clear();
+    friction_ = repulsive_ = reconcile_ = false;
+    std::apply(
+        [&](auto&... lists) {
+          (
+              [&](auto& list) {
+                using Shape = std::decay_t<decltype(list.front().shape)>;
+                for (auto& held : list) {
+                  drape::detail::advancePose(held, hd);
+                  const auto compiled = drape::detail::compileSolid<Shape, float>(held, state_.origin);
+                  SolidPass p{shapeCode<Shape>(), packShape(compiled.sdf), compiled.motion, !Sdf<Shape, float>::kLinear,
+                              compiled.repulsionRadius, compiled.falloff, nullptr};
+                  if constexpr (std::is_same_v<Shape, MeshShape>) p.grid = gridNodes(held.shape.grid);
+                  friction_ = friction_ || p.motion.staticFriction > 0 || p.motion.dynamicFriction > 0;
+                  repulsive_ = repulsive_ || p.repulsionRadius > 0;
+                  reconcile_ = reconcile_ || p.curved;
+                  passes_.push_back(p);
+                }
+              }(lists),
+              ...);
+        },
+        solids_);
+    reconcile_ = reconcile_ || passes_.size() > 1;
+  }
+
+  /// A collision kernel's uniforms for one solid (its field, motion and friction), and its grid's nodes bound.
+  void setSolidUniforms(const Program& k, const SolidPass& p) const {
+    const SolidMotion<float>& m = p.motion;
+    k.set(layout::kThickness, float(settings_.thickness));
+    setShape(k.id(), p.field);
+    k.set(layout::kSolidCentre, m.centre.x(), m.centre.y(), m.centre.z());
+    k.set(layout::kSolidLinear, m.linearVelocity.x(), m.linearVelocity.y(), m.linearVelocity.z());
+    k.set(layout::kSolidAngular, m.angularVelocity.x(), m.angularVelocity.y(), m.angularVelocity.z());
+    glProgramUniform2f(k.id(), layout::kFriction, m.staticFriction, m.dynamicFriction);
+    if (p.grid) p.grid->bind(layout::kGrid);
+  }
+
+  /// One solid's vertex pass (projectVertexContacts): `fresh` for the substep's first, which starts every
+  /// record; `pass` the settle pass (-1: the first pass), `slack` what the settle passes leave alone.
+  void vertexPass(const SolidPass& p, bool fresh, int pass, float slack) {
+    const Program& k = kernels_[p.code].vertices;
+    setSolidUniforms(k, p);
+    k.set(layout::kCount, unsigned(vertexCount()));
+    k.set(layout::kSlack, slack);
+    glProgramUniform1i(k.id(), layout::kPass, pass);
+    k.set(layout::kFresh, unsigned(fresh));
+    k.dispatch(std::size_t(vertexCount()));
+  }
+
+  /// One curved solid's face pass (projectFaceContacts), colour by colour.
+  void facePass(const SolidPass& p) {
+    const Program& k = kernels_[p.code].faces;
+    setSolidUniforms(k, p);
+    glProgramUniform1i(k.id(), layout::kPgdIterations, settings_.pgdIterations);
+    for (std::size_t c = 0; c + 1 < faceColourOffsets_.size(); ++c) {
+      const std::size_t count = faceColourOffsets_[c + 1] - faceColourOffsets_[c];
+      k.set(layout::kFirst, unsigned(faceColourOffsets_[c]));
+      k.set(layout::kCount, unsigned(count));
+      k.dispatch(count);
+    }
+  }
+
+  /// Vertices with several contact planes go outside all of them (projectOntoContactPlanes); in settle pass
+  /// `pass` only if that pass found a contact.
+  void settle(int pass) {
+    settle_.set(layout::kCount, unsigned(vertexCount()));
+    glProgramUniform1i(settle_.id(), layout::kPass, pass);
+    settle_.dispatch(std::size_t(vertexCount()));
+  }
+
   void subStep(double hd) {
     const float h = float(hd);
     const auto n = unsigned(vertexCount());
-    // The solid for this substep: a kinematic one moves first, as on the CPU (prepareSolids). Its field goes to
-    // the kernels packed in four vec4s (packShape).
-    std::optional<SolidMotion<float>> motion;
-    PackedShape field{};
-    bool curved = false;
-    float repulsionRadius = 0;
-    Falloff falloff = Falloff::Linear;
-    std::visit(
-        [&](auto& held) {
-          if constexpr (!std::is_same_v<std::decay_t<decltype(held)>, std::monostate>) {
-            using Shape = std::decay_t<decltype(held.shape)>;
-            drape::detail::advancePose(held, hd);
-            const auto compiled = drape::detail::compileSolid<Shape, float>(held, state_.origin);
-            motion = compiled.motion;
-            field = packShape(compiled.sdf);
-            curved = !Sdf<Shape, float>::kLinear;
-            repulsionRadius = compiled.repulsionRadius;
-            falloff = compiled.falloff;
-          }
-        },
-        solid_);
-    const bool friction = motion && (motion->staticFriction > 0 || motion->dynamicFriction > 0);
+    prepareSolids(hd);
     positions_.bind(layout::kPositions);
     velocities_.bind(layout::kVelocities);
     predicted_.bind(layout::kPredicted);
@@ -373,19 +447,19 @@ class Solver {
     neighbourOffsets_.bind(layout::kNeighbourOffsets);
     neighbours_.bind(layout::kNeighbours);
     rings_.bind(layout::kPropagation);
-    if (grid_.size() > 0) grid_.bind(layout::kGrid);
+    flags_.bind(layout::kFlags);
 
-    // 0. repulsion (phase 1), only for a solid that has a region
-    if (repulsionRadius > 0) {
-      const SolidMotion<float>& m = *motion;
-      setShape(repel_.id(), field);
-      repel_.set(layout::kCount, n);
-      repel_.set(layout::kThickness, float(settings_.thickness));
-      repel_.set(layout::kSolidCentre, m.centre.x(), m.centre.y(), m.centre.z());
-      repel_.set(layout::kSolidLinear, m.linearVelocity.x(), m.linearVelocity.y(), m.linearVelocity.z());
-      repel_.set(layout::kSolidAngular, m.angularVelocity.x(), m.angularVelocity.y(), m.angularVelocity.z());
-      glProgramUniform2f(repel_.id(), layout::kRepulsion, 1.0f / repulsionRadius, falloff == Falloff::Smooth ? 1.0f : 0.0f);
-      repel_.dispatch(n);
+    // 0. repulsion (phase 1), for each solid that has a region
+    if (repulsive_) {
+      for (const SolidPass& p : passes_) {
+        if (!(p.repulsionRadius > 0)) continue;
+        const Program& k = kernels_[p.code].repel;
+        setSolidUniforms(k, p);
+        k.set(layout::kCount, n);
+        glProgramUniform2f(k.id(), layout::kRepulsion, 1.0f / p.repulsionRadius,
+                           p.falloff == Falloff::Smooth ? 1.0f : 0.0f);
+        k.dispatch(n);
+      }
     }
 
     // 1. predict
@@ -393,7 +467,7 @@ class Solver {
     predict_.set(layout::kCount, n);
     predict_.set(layout::kStep, h);
     predict_.set(layout::kGravityStep, gh.x(), gh.y(), gh.z());
-    predict_.set(layout::kKeepStart, unsigned(friction));
+    predict_.set(layout::kKeepStart, unsigned(friction_));
     predict_.dispatch(n);
 
     // 2. solve, set by set and colour by colour, as the CPU solver orders them
@@ -445,41 +519,36 @@ class Solver {
     update_.set(layout::kInverseStep, 1.0f / h);
     update_.dispatch(n);
 
-    // 4. collide (DESIGN 3, 4): project vertices, then (a curved solid, improved method) faces; split; propagate
-    if (!motion) return;
-    const SolidMotion<float>& m = *motion;
-    auto setSolid = [&](const Program& k) {
-      k.set(layout::kThickness, float(settings_.thickness));
-      setShape(k.id(), field);
-      k.set(layout::kSolidCentre, m.centre.x(), m.centre.y(), m.centre.z());
-      k.set(layout::kSolidLinear, m.linearVelocity.x(), m.linearVelocity.y(), m.linearVelocity.z());
-      k.set(layout::kSolidAngular, m.angularVelocity.x(), m.angularVelocity.y(), m.angularVelocity.z());
-    };
-    setSolid(collideVertices_);
-    collideVertices_.set(layout::kCount, n);
-    collideVertices_.dispatch(n);
-    if (curved && settings_.collisionMethod == CollisionMethod::Improved) {
-      faces_.bind(layout::kFaces);
-      setSolid(collideFaces_);
-      glProgramUniform1i(collideFaces_.id(), layout::kPgdIterations, settings_.pgdIterations);
-      for (std::size_t c = 0; c + 1 < faceColourOffsets_.size(); ++c) {
-        const std::size_t count = faceColourOffsets_[c + 1] - faceColourOffsets_[c];
-        collideFaces_.set(layout::kFirst, unsigned(faceColourOffsets_[c]));
-        collideFaces_.set(layout::kCount, unsigned(count));
-        collideFaces_.dispatch(count);
+    // 4. collide (DESIGN 3, 4): per solid, project vertices, then (a curved solid, improved method) faces; where
+    //    surfaces meet, settle; split; propagate (projectAllContacts and collide on the CPU)
+    if (passes_.empty()) return;
+    const bool faces = settings_.collisionMethod == CollisionMethod::Improved;
+    if (faces) faces_.bind(layout::kFaces);
+    for (std::size_t k = 0; k < passes_.size(); ++k) {
+      vertexPass(passes_[k], k == 0, -1, 0.0f);
+      if (faces && passes_[k].curved) facePass(passes_[k]);
+    }
+    if (reconcile_) {
+      settle(-1);
+      if (passes_.size() > 1) {
+        glClearNamedBufferData(flags_.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, nullptr);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        const float slack = 1e-4f * float(settings_.thickness);
+        for (int pass = 0; pass < kSettlePasses; ++pass) {
+          for (const SolidPass& p : passes_) vertexPass(p, false, pass, slack);
+          settle(pass);
+        }
       }
     }
-    const Program& respond = friction ? respondFriction_ : respond_;
+    const Program& respond = friction_ ? respondFriction_ : respond_;
     respond.set(layout::kCount, n);
     respond.set(layout::kStep, h);
     respond.set(layout::kInverseStep, 1.0f / h);
     respond.set(layout::kNormalDamping, float(settings_.normalDamping));
-    glProgramUniform2f(respond.id(), layout::kFriction, m.staticFriction, m.dynamicFriction);
     respond.dispatch(n);
-    if (settings_.collisionMethod != CollisionMethod::Improved || settings_.propagationRings <= 0 ||
-        !(settings_.propagationWeight > 0))
-      return;
+    if (!faces || settings_.propagationRings <= 0 || !(settings_.propagationWeight > 0)) return;
     glClearNamedBufferData(rings_.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, nullptr);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
     propagate_.set(layout::kCount, n);
     propagate_.set(layout::kWeight, float(settings_.propagationWeight));
     for (int ring = 1; ring <= settings_.propagationRings; ++ring) {
@@ -518,17 +587,30 @@ class Solver {
   Settings settings_;
   mutable ClothState<float> state_;  ///< the CPU copy: current when fresh_
   mutable bool fresh_ = true;
-  /// The one solid, posed as of the last substep (monostate: none).
-  std::variant<std::monostate, Solid<Plane>, Solid<Sphere>, Solid<Box>, Solid<Capsule>, Solid<Cylinder>,
-               Solid<MeshShape>>
-      solid_;
-  Buffer<layout::Vertex> grid_;  ///< a mesh solid's distance grid nodes
-  std::shared_ptr<const DistanceGrid> uploadedGrid_;  ///< the grid whose nodes grid_ holds
-  Program predict_, solve_, update_, respond_, respondFriction_, propagate_, centre_, translate_, pinKernel_;
+  /// The solids by shape type, in the CPU solver's order, posed as of the last substep.
+  std::tuple<std::vector<Solid<Plane>>, std::vector<Solid<Sphere>>, std::vector<Solid<Box>>,
+             std::vector<Solid<Capsule>>, std::vector<Solid<Cylinder>>, std::vector<Solid<MeshShape>>>
+      solids_;
+  std::vector<SolidPass> passes_;  ///< this substep's solids (prepareSolids)
+  bool friction_ = false;    ///< some solid has friction this substep
+  bool repulsive_ = false;   ///< some solid has a repulsion region this substep
+  bool reconcile_ = false;   ///< a vertex may touch several surfaces this substep (a curved solid, or several)
+  struct ShapeKernels {  ///< the collision kernels compiled for one shape type (compileFor)
+    Program vertices, faces, repel;
+    bool ready = false;
+  };
+  std::array<ShapeKernels, 7> kernels_;  ///< by layout::ShapeCode
+  struct GridNodes {
+    std::shared_ptr<const DistanceGrid> grid;
+    Buffer<layout::Vertex> nodes;  ///< (normal, distance) per node
+  };
+  std::vector<GridNodes> grids_;  ///< every grid a mesh solid has used, uploaded once
+  Buffer<std::uint32_t> flags_;   ///< per settle pass: whether its vertex passes found a contact
+  static constexpr int kSettlePasses = 4;  ///< extra vertex passes where solids meet (BasicSolver::kSettlePasses)
+  Program predict_, solve_, update_, respond_, respondFriction_, propagate_, centre_, translate_, pinKernel_, settle_;
   std::vector<Pin> pins_;  ///< targets in world coordinates (uploaded each substep, in the local frame then)
   Buffer<layout::PinSlot> pinSlots_;
   Buffer<float> pinLambdas_;
-  Program collideVertices_, collideFaces_, repel_;  ///< compiled for the solid's shape (compileFor)
   Buffer<std::array<std::uint32_t, 4>> faces_;  ///< the faces, colour by colour (colourFaces)
   std::vector<std::size_t> faceColourOffsets_;   ///< colour c is faces [offsets[c], offsets[c + 1])
   Buffer<layout::Vertex> positions_, velocities_, predicted_, packed_, start_, reduction_;
