@@ -203,6 +203,27 @@ class Solver {
     return state_.v[std::size_t(i)].cast<double>();
   }
 
+  /// Replaces all positions (m, world); rejects a wrong count, a non-finite position or one beyond 1e9 m, or a
+  /// cloth spread over more than 1e5 m, before changing anything. The local origin moves to the new positions
+  /// (snapped to 1/64 m, as on the CPU).
+  void setPositions(const std::vector<Eigen::Vector3d>& world) {
+    drape::detail::require(Index(world.size()) == vertexCount(),
+                           "setPositions got " + std::to_string(world.size()) + " positions for " +
+                               std::to_string(vertexCount()) + " vertices");
+    for (std::size_t i = 0; i < world.size(); ++i)
+      drape::detail::require(drape::detail::allFinite(world[i]) && world[i].cwiseAbs().maxCoeff() <= 1e9,
+                             "position of vertex " + std::to_string(i) + " is not finite or lies beyond 1e9 m");
+    Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+    for (const auto& p : world) centre += p / double(world.size());
+    const Eigen::Vector3d origin = snapOrigin(centre);
+    for (std::size_t i = 0; i < world.size(); ++i)
+      drape::detail::require((world[i] - origin).cwiseAbs().maxCoeff() <= 1e5,
+                             "position of vertex " + std::to_string(i) + " lies more than 1e5 m from the cloth's centre");
+    download();
+    state_.origin = origin;
+    for (std::size_t i = 0; i < world.size(); ++i) state_.x[i] = (world[i] - origin).cast<float>();
+    upload();
+  }
   /// Replaces all velocities (m/s); rejects a wrong count or a non-finite or absurd value before changing anything.
   void setVelocities(const std::vector<Eigen::Vector3d>& v) {
     drape::detail::require(Index(v.size()) == vertexCount(),
@@ -338,6 +359,9 @@ class Solver {
     drape::detail::require(s.motion != Motion::Dynamic, "coupled (dynamic) solids are CPU-only for now");
   }
 
+  /// p to the nearest multiple of 1/64 m in each coordinate: a shift by it is exact in float.
+  static Eigen::Vector3d snapOrigin(const Eigen::Vector3d& p) { return (p * 64.0).array().round().matrix() / 64.0; }
+
   /// Moves the local origin after the cloth once its centre is kRebaseDistance away, by a multiple of 1/64 m
   /// so the shift is exact in float (BasicSolver::rebase). The centre is summed on the GPU.
   void rebase() {
@@ -351,7 +375,7 @@ class Solver {
     const layout::Vertex c = reduction_.read()[0];
     const Eigen::Vector3d centre(c.x, c.y, c.z);
     if (!(centre.norm() >= 0.5)) return;
-    const Eigen::Vector3d shift = (centre * 64.0).array().round().matrix() / 64.0;
+    const Eigen::Vector3d shift = snapOrigin(centre);
     const Vec3<float> shiftF = shift.cast<float>();
     translate_.set(layout::kCount, n);
     translate_.set(layout::kShift, shiftF.x(), shiftF.y(), shiftF.z());
