@@ -275,7 +275,7 @@ float sdf(vec3 x, out vec3 gradient) {
 // rotation with the grid's lower corner in w, shape[4] = (1 / cell size, node counts along x, y, z); the nodes
 // (normal, distance), x fastest, in their own buffer. Trilinear inside the grid; outside, the distance to the
 // grid's box combined with the distance at the nearest point of the box.
-layout(std430, binding = DRAPE_B_GRID) readonly buffer GridNodes { vec4 nodes[]; };
+layout(std430, binding = DRAPE_B_SHAPE_DATA) readonly buffer GridNodes { vec4 nodes[]; };
 
 float sdf(vec3 x, out vec3 gradient) {
   const vec3 r0 = shape[1].xyz, r1 = shape[2].xyz, r2 = shape[3].xyz;
@@ -320,6 +320,76 @@ float sdf(vec3 x, out vec3 gradient) {
   const float glen = length3(grad);
   gradient = rotateBack(r0, r1, r2, glen > 0.0 ? grad / glen : excess / e);
   return phi;
+}
+#elif DRAPE_SHAPE == DRAPE_SHAPE_HULL
+// A convex hull (the twin of Sdf<ConvexHull, S>): shape[0] = (centre, nearSurface), shape[1..3] = the rows of the
+// world-to-hull rotation, with the face count in shape[1].w; the faces and edges in the shape-data buffer
+// (packHull in gpu/shapes.hpp): per face two vec4s, (normal, offset) and (first edge, edge count); then per edge
+// three, (start, 1 / |delta|^2), (delta, twin edge or -1), (inward, 0). Inside, the largest signed distance to a
+// face plane; outside, the distance to the closest point, found in the face, edge or vertex region that holds q.
+layout(std430, binding = DRAPE_B_SHAPE_DATA) readonly buffer HullData { vec4 hullData[]; };
+
+vec3 hullOutside(vec3 r0, vec3 r1, vec3 r2, vec3 delta, float distance, vec3 frontNormal) {
+  precise const vec3 g = distance > shape[0].w ? delta / distance : frontNormal;
+  return rotateBack(r0, r1, r2, g);
+}
+
+float sdf(vec3 x, out vec3 gradient) {
+  const vec3 r0 = shape[1].xyz, r1 = shape[2].xyz, r2 = shape[3].xyz;
+  const int faces = int(shape[1].w);
+  const int edgeBase = 2 * faces;
+  const float slack = shape[0].w;
+  precise const vec3 q = rotate(r0, r1, r2, x - shape[0].xyz);
+  int front = 0;
+  precise float frontDistance = dot3(hullData[0].xyz, q) - hullData[0].w;
+  for (int f = 1; f < faces; ++f) {
+    const vec4 plane = hullData[2 * f];
+    precise const float s = dot3(plane.xyz, q) - plane.w;
+    if (s > frontDistance) front = f, frontDistance = s;
+  }
+  const vec3 frontNormal = hullData[2 * front].xyz;
+  if (frontDistance <= 0.0) {
+    gradient = rotateBack(r0, r1, r2, frontNormal);
+    return frontDistance;
+  }
+  float bestSq = uintBitsToFloat(0x7F800000u);  // infinity
+  vec3 bestDelta = vec3(0.0);
+  for (int f = 0; f < faces; ++f) {
+    const vec4 plane = hullData[2 * f];
+    precise const float s = dot3(plane.xyz, q) - plane.w;
+    precise const float beyond = s - slack;
+    if (!(s > 0.0) || (s > slack && beyond * beyond >= bestSq)) continue;
+    const int first = int(hullData[2 * f + 1].x), edgeCount = int(hullData[2 * f + 1].y);
+    bool inPolygon = true;
+    for (int k = 0; k < edgeCount; ++k) {
+      const int e = edgeBase + 3 * (first + k);
+      const vec4 start = hullData[e], delta = hullData[e + 1], inward = hullData[e + 2];
+      precise const vec3 r = q - start.xyz;
+      if (dot3(r, inward.xyz) >= 0.0) continue;
+      inPolygon = false;
+      precise const float along = dot3(r, delta.xyz) * start.w;
+      precise const vec3 d = r - clamp(along, 0.0, 1.0) * delta.xyz;
+      const float dSq = dot3(d, d);
+      const int twin = int(delta.w);
+      if (along > 0.0 && along < 1.0 && twin >= 0) {
+        const int t = edgeBase + 3 * twin;
+        precise const vec3 rt = q - hullData[t].xyz;
+        if (dot3(rt, hullData[t + 2].xyz) <= 0.0) {
+          const float distance = sqrt(dSq);
+          gradient = hullOutside(r0, r1, r2, d, distance, frontNormal);
+          return distance;
+        }
+      }
+      if (dSq < bestSq) bestSq = dSq, bestDelta = d;
+    }
+    if (inPolygon) {
+      gradient = rotateBack(r0, r1, r2, plane.xyz);
+      return s;
+    }
+  }
+  const float distance = sqrt(bestSq);
+  gradient = hullOutside(r0, r1, r2, bestDelta, distance, frontNormal);
+  return distance;
 }
 #endif
 

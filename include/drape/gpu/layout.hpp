@@ -32,7 +32,7 @@ enum Binding : unsigned {
   kFaces = 12,            ///< uvec4 per face: its three vertices (and 0), colour by colour
   kPins = 13,             ///< PinSlot per pin
   kPinLambdas = 14,       ///< float per pin: its XPBD multiplier in the current substep
-  kGrid = 15,             ///< vec4 per node of a distance grid: (normal, distance), x fastest
+  kShapeData = 15,        ///< vec4s: a grid field's nodes ((normal, distance), x fastest) or a hull's faces and edges
   kFlags = 16,            ///< uint per settle pass: 1 once a vertex pass of that pass found a contact
 };
 
@@ -64,7 +64,7 @@ enum Uniform : int {
 };
 
 /// Shape codes for DRAPE_SHAPE, the shape a collision kernel is compiled for.
-enum ShapeCode : int { kPlane = 1, kSphere = 2, kBox = 3, kCapsule = 4, kCylinder = 5, kGridShape = 6 };
+enum ShapeCode : int { kPlane = 1, kSphere = 2, kBox = 3, kCapsule = 4, kCylinder = 5, kGridShape = 6, kHull = 7 };
 
 /// One distance constraint: |x_a - x_b| = rest.
 struct Constraint {
@@ -167,7 +167,8 @@ inline std::string preamble(const std::string& defines = {}) {
   s += define("DRAPE_SHAPE_CAPSULE", kCapsule);
   s += define("DRAPE_SHAPE_CYLINDER", kCylinder);
   s += define("DRAPE_SHAPE_GRID", kGridShape);
-  s += define("DRAPE_B_GRID", kGrid);
+  s += define("DRAPE_SHAPE_HULL", kHull);
+  s += define("DRAPE_B_SHAPE_DATA", kShapeData);
   s += define("DRAPE_B_FLAGS", kFlags);
   s += define("DRAPE_U_SLACK", kSlack);
   s += define("DRAPE_U_PASS", kPass);

@@ -10,6 +10,7 @@
 #include <array>
 #include <string>
 #include <type_traits>
+#include <vector>
 
 namespace drape::gpu {
 
@@ -17,7 +18,8 @@ namespace drape::gpu {
 template <class Shape>
 inline constexpr bool kGpuShape = std::is_same_v<Shape, Plane> || std::is_same_v<Shape, Sphere> ||
                                   std::is_same_v<Shape, Box> || std::is_same_v<Shape, Capsule> ||
-                                  std::is_same_v<Shape, Cylinder> || std::is_same_v<Shape, MeshShape>;
+                                  std::is_same_v<Shape, Cylinder> || std::is_same_v<Shape, ConvexHull> ||
+                                  std::is_same_v<Shape, MeshShape>;
 
 template <class Shape> constexpr layout::ShapeCode shapeCode() {
   static_assert(kGpuShape<Shape>, "this shape has no GPU field yet");
@@ -26,6 +28,7 @@ template <class Shape> constexpr layout::ShapeCode shapeCode() {
   else if constexpr (std::is_same_v<Shape, Box>) return layout::kBox;
   else if constexpr (std::is_same_v<Shape, Capsule>) return layout::kCapsule;
   else if constexpr (std::is_same_v<Shape, Cylinder>) return layout::kCylinder;
+  else if constexpr (std::is_same_v<Shape, ConvexHull>) return layout::kHull;
   else return layout::kGridShape;
 }
 
@@ -68,8 +71,32 @@ inline PackedShape packShape(const Sdf<Cylinder, float>& f) {
   return packRotation(f.centre, f.radius, f.toLocal, f.halfHeight, 0, 0);
 }
 
+/// A convex hull: the centre with the field's nearSurface, the rotation with the face count (its faces and edges go
+/// to their own buffer, layout::kShapeData: packHull).
+inline PackedShape packShape(const Sdf<ConvexHull, float>& f) {
+  return packRotation(f.centre, f.hull->nearSurface, f.toLocal, float(f.hull->faces.size()), 0, 0);
+}
+/// A hull's faces, then its edges, as shaders/common.glsl reads them: per face (normal, offset) and (first edge,
+/// edge count, 0, 0); per edge (start, 1 / |delta|^2), (delta, twin or -1) and (inward, 0). Indices are exact in
+/// float up to 2^24.
+inline std::vector<layout::Vertex> packHull(const drape::detail::HullField<float>& h) {
+  drape::detail::require(h.edges.size() < (1u << 24), "a hull with 2^24 edges or more does not fit the GPU's layout");
+  std::vector<layout::Vertex> out;
+  out.reserve(2 * h.faces.size() + 3 * h.edges.size());
+  for (const auto& f : h.faces) {
+    out.push_back({f.normal.x(), f.normal.y(), f.normal.z(), f.offset});
+    out.push_back({float(f.firstEdge), float(f.edgeCount), 0, 0});
+  }
+  for (const auto& e : h.edges) {
+    out.push_back({e.start.x(), e.start.y(), e.start.z(), e.invLengthSq});
+    out.push_back({e.delta.x(), e.delta.y(), e.delta.z(), float(e.twin)});
+    out.push_back({e.inward.x(), e.inward.y(), e.inward.z(), 0});
+  }
+  return out;
+}
+
 /// A distance grid: the rotation and centre, the grid's lower corner, cell size and node counts (its nodes go
-/// to their own buffer, layout::kGrid).
+/// to their own buffer, layout::kShapeData).
 inline PackedShape packShape(const Sdf<MeshShape, float>& f) {
   const auto& s = f.sample;
   PackedShape p = packRotation(f.centre.head<3>(), s.cellSize, f.toLocal.topLeftCorner<3, 3>(), s.lower[0], s.lower[1],

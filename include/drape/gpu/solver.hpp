@@ -148,9 +148,11 @@ class Solver {
     checkSupported(solid);
     context_->makeCurrent();
     compileFor<Shape>();
-    uploadGrid(solid);
+    auto compiled = drape::detail::compileSolid<Shape, float>(solid, state_.origin);
+    uploadShapeData(compiled);
     auto& list = std::get<std::vector<Solid<Shape>>>(solids_);
     list.push_back(solid);
+    std::get<std::vector<CompiledSolid<Shape, float>>>(compiled_).push_back(std::move(compiled));
     return Index(list.size()) - 1;
   }
   template <class Shape> const Solid<Shape>& solid(Index k) const {
@@ -166,8 +168,11 @@ class Solver {
     drape::detail::validateSolid(s, "solid " + std::to_string(k));
     checkSupported(s);
     context_->makeCurrent();
-    uploadGrid(s);
+    auto compiled = drape::detail::compileSolid<Shape, float>(s, state_.origin);
+    uploadShapeData(compiled);
     list[std::size_t(k)] = s;
+    std::get<std::vector<CompiledSolid<Shape, float>>>(compiled_)[std::size_t(k)] = std::move(compiled);
+    dropUnusedShapeData();
   }
   /// Calls f(const CompiledSolid<Shape, float>&) for every solid, compiled at the current local origin (for the
   /// metrics, which read the state back).
@@ -309,7 +314,7 @@ class Solver {
     bool curved;  ///< has a face pass (a field that is not linear)
     float repulsionRadius;
     Falloff falloff;
-    const Buffer<layout::Vertex>* grid;  ///< a mesh solid's grid nodes, else null
+    const Buffer<layout::Vertex>* data;  ///< a mesh's grid nodes or a hull's faces and edges, else null
   };
   void checkVertex(Index i) const {
     drape::detail::require(i >= 0 && i < vertexCount(), "vertex index " + std::to_string(i) + " out of range [0, " +
@@ -327,20 +332,34 @@ class Solver {
     k.ready = true;
   }
 
-  /// A mesh solid's grid nodes to the GPU (once per grid; other shapes have none).
-  template <class Shape> void uploadGrid(const Solid<Shape>& s) {
-    if constexpr (std::is_same_v<Shape, MeshShape>) {
-      if (gridNodes(s.shape.grid)) return;
-      const auto& nodes = s.shape.grid->nodes;
-      std::vector<layout::Vertex> v(nodes.size());
-      for (std::size_t i = 0; i < v.size(); ++i) v[i] = {nodes[i].x(), nodes[i].y(), nodes[i].z(), nodes[i].w()};
-      grids_.push_back({s.shape.grid, Buffer<layout::Vertex>(v)});
-    }
+  /// The shape data a solid's field reads from its own buffer (layout::kShapeData): a mesh's grid nodes, a hull's
+  /// faces and edges. Each grid or hull is uploaded once, however many solids share it.
+  template <class Shape> static std::shared_ptr<const void> shapeDataKey(const CompiledSolid<Shape, float>& c) {
+    if constexpr (std::is_same_v<Shape, MeshShape>) return c.sdf.grid;
+    else if constexpr (std::is_same_v<Shape, ConvexHull>) return c.sdf.hull;
+    else return nullptr;
   }
-  const Buffer<layout::Vertex>* gridNodes(const std::shared_ptr<const DistanceGrid>& grid) const {
-    for (const auto& g : grids_)
-      if (g.grid == grid) return &g.nodes;
+  template <class Shape> void uploadShapeData(const CompiledSolid<Shape, float>& c) {
+    const std::shared_ptr<const void> key = shapeDataKey(c);
+    if (!key || shapeData(key)) return;
+    std::vector<layout::Vertex> v;
+    if constexpr (std::is_same_v<Shape, MeshShape>) {
+      const auto& nodes = c.sdf.grid->nodes;
+      v.resize(nodes.size());
+      for (std::size_t i = 0; i < v.size(); ++i) v[i] = {nodes[i].x(), nodes[i].y(), nodes[i].z(), nodes[i].w()};
+    } else if constexpr (std::is_same_v<Shape, ConvexHull>) {
+      v = packHull(*c.sdf.hull);
+    }
+    shapeData_.push_back({key, Buffer<layout::Vertex>(v)});
+  }
+  const Buffer<layout::Vertex>* shapeData(const std::shared_ptr<const void>& key) const {
+    for (const auto& d : shapeData_)
+      if (d.key == key) return &d.data;
     return nullptr;
+  }
+  /// Frees the data no solid uses any more (held only here) after a solid was replaced.
+  void dropUnusedShapeData() {
+    std::erase_if(shapeData_, [](const ShapeData& d) { return d.key.use_count() == 1; });
   }
 
   void uploadFaces() {
@@ -393,12 +412,14 @@ class Solver {
           (
               [&](auto& list) {
                 using Shape = std::decay_t<decltype(list.front().shape)>;
-                for (auto& held : list) {
+                auto& out = std::get<std::vector<CompiledSolid<Shape, float>>>(compiled_);
+                for (std::size_t k = 0; k < list.size(); ++k) {
+                  Solid<Shape>& held = list[k];
                   drape::detail::advancePose(held, hd);
-                  const auto compiled = drape::detail::compileSolid<Shape, float>(held, state_.origin);
+                  drape::detail::recompileSolid<Shape, float>(out[k], held, state_.origin);
+                  const CompiledSolid<Shape, float>& compiled = out[k];
                   SolidPass p{shapeCode<Shape>(), packShape(compiled.sdf), compiled.motion, !Sdf<Shape, float>::kLinear,
-                              compiled.repulsionRadius, compiled.falloff, nullptr};
-                  if constexpr (std::is_same_v<Shape, MeshShape>) p.grid = gridNodes(held.shape.grid);
+                              compiled.repulsionRadius, compiled.falloff, shapeData(shapeDataKey(compiled))};
                   friction_ = friction_ || p.motion.staticFriction > 0 || p.motion.dynamicFriction > 0;
                   repulsive_ = repulsive_ || p.repulsionRadius > 0;
                   reconcile_ = reconcile_ || p.curved;
@@ -420,7 +441,7 @@ class Solver {
     k.set(layout::kSolidLinear, m.linearVelocity.x(), m.linearVelocity.y(), m.linearVelocity.z());
     k.set(layout::kSolidAngular, m.angularVelocity.x(), m.angularVelocity.y(), m.angularVelocity.z());
     glProgramUniform2f(k.id(), layout::kFriction, m.staticFriction, m.dynamicFriction);
-    if (p.grid) p.grid->bind(layout::kGrid);
+    if (p.data) p.data->bind(layout::kShapeData);
   }
 
   /// One solid's vertex pass (projectVertexContacts): `fresh` for the substep's first, which starts every
@@ -613,8 +634,15 @@ class Solver {
   mutable bool fresh_ = true;
   /// The solids by shape type, in the CPU solver's order, posed as of the last substep.
   std::tuple<std::vector<Solid<Plane>>, std::vector<Solid<Sphere>>, std::vector<Solid<Box>>,
-             std::vector<Solid<Capsule>>, std::vector<Solid<Cylinder>>, std::vector<Solid<MeshShape>>>
+             std::vector<Solid<Capsule>>, std::vector<Solid<Cylinder>>, std::vector<Solid<ConvexHull>>,
+             std::vector<Solid<MeshShape>>>
       solids_;
+  /// Their fields, compiled at the substep's pose (recompileSolid keeps a hull's query data and a grid).
+  std::tuple<std::vector<CompiledSolid<Plane, float>>, std::vector<CompiledSolid<Sphere, float>>,
+             std::vector<CompiledSolid<Box, float>>, std::vector<CompiledSolid<Capsule, float>>,
+             std::vector<CompiledSolid<Cylinder, float>>, std::vector<CompiledSolid<ConvexHull, float>>,
+             std::vector<CompiledSolid<MeshShape, float>>>
+      compiled_;
   std::vector<SolidPass> passes_;  ///< this substep's solids (prepareSolids)
   bool friction_ = false;    ///< some solid has friction this substep
   bool repulsive_ = false;   ///< some solid has a repulsion region this substep
@@ -623,12 +651,12 @@ class Solver {
     Program vertices, faces, repel;
     bool ready = false;
   };
-  std::array<ShapeKernels, 7> kernels_;  ///< by layout::ShapeCode
-  struct GridNodes {
-    std::shared_ptr<const DistanceGrid> grid;
-    Buffer<layout::Vertex> nodes;  ///< (normal, distance) per node
+  std::array<ShapeKernels, 8> kernels_;  ///< by layout::ShapeCode
+  struct ShapeData {
+    std::shared_ptr<const void> key;  ///< the grid or hull query data it was made from
+    Buffer<layout::Vertex> data;
   };
-  std::vector<GridNodes> grids_;  ///< every grid a mesh solid has used, uploaded once
+  std::vector<ShapeData> shapeData_;  ///< every grid and hull the solids use, uploaded once each
   Buffer<std::uint32_t> flags_;   ///< per settle pass: whether its vertex passes found a contact
   static constexpr int kSettlePasses = 4;  ///< extra vertex passes where solids meet (BasicSolver::kSettlePasses)
   Program predict_, solve_, update_, respond_, respondFriction_, propagate_, centre_, translate_, pinKernel_, settle_;
