@@ -85,6 +85,24 @@ void recordContact(inout Contact c, vec3 x, vec3 n, float dn, vec3 vc, vec2 fric
   }
 }
 
+// Coulomb friction on positions for one contact surface (the CPU twin: applyPositionFriction in
+// include/drape/collision/response.hpp): the substep's tangential displacement relative to the solid, if within
+// mu_s times the correction, is undone (stick: returns true); beyond it, mu_d times the correction of it is.
+bool applyPositionFriction(vec3 n, vec3 vc, float correction, vec2 mu, inout vec3 x, vec3 start, float h) {
+  precise const vec3 disp = (x - start) - h * vc;
+  precise const vec3 dispT = disp - dot3(n, disp) * n;
+  precise const float slip = length3(dispT);
+  if (slip <= mu.x * correction) {
+    precise const vec3 stuck = x - dispT;
+    x = stuck;
+    return true;
+  }
+  precise const float undo = min(1.0, mu.y * correction / slip);
+  precise const vec3 slid = x - undo * dispT;
+  x = slid;
+  return false;
+}
+
 // The point nearest to y0 in {y : n_k . y >= b_k} for up to three half-spaces (the CPU twin: nearestInHalfSpaces
 // in include/drape/collision/response.hpp): the nearest feasible point among the projections onto every subset of
 // the planes, within kReach times the total violation (or minReach); else the least-squares compromise by

@@ -38,17 +38,9 @@ void main() {
 #if DRAPE_FRICTION
     const float correction = c.normal[k].w;
     const vec2 mu = c.friction[k].xy;  // static, dynamic
-    precise const vec3 disp = (xi - start) - h * vc;
-    precise const vec3 dispT = disp - dot3(n, disp) * n;
-    precise const float slip = length3(dispT);
-    if (slip <= mu.x * correction) {
-      precise const vec3 stuck = xi - dispT;
-      xi = stuck;
+    if (applyPositionFriction(n, vc, correction, mu, xi, start, h)) {
       vt = vec3(0.0);
     } else {
-      precise const float undo = min(1.0, mu.y * correction / slip);
-      precise const vec3 slid = xi - undo * dispT;
-      xi = slid;
       precise const float speed = length3(vt);
       precise const float slow = mu.y * correction * invH;
       vt = vt * (speed > slow ? (speed - slow) / speed : 0.0);

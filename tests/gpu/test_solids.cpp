@@ -172,7 +172,8 @@ TEST_CASE("a cloth folded into a V gutter of two planes: the GPU solver follows 
   // At 45 degrees the walls meet square and the two projections commute; at 60 the fold vertices are pushed
   // back into one wall by the other, so the settle placement and the reconciled split act every substep.
   c.wallDeg = GENERATE(45.0, 60.0);
-  INFO("walls at " << c.wallDeg << " degrees");
+  c.settings.collisionMethod = GENERATE(drape::CollisionMethod::Improved, drape::CollisionMethod::Baseline);
+  INFO("walls at " << c.wallDeg << " degrees, " << drape::toString(c.settings.collisionMethod));
   drape::GridDesc grid;
   grid.nx = c.nx;
   grid.ny = c.ny;

@@ -212,19 +212,24 @@ TEST_CASE("on the slope the GPU solver follows the CPU solver over 1 to 10 subst
   c.ny = 30;
   c.gap = 0.001;  // the uphill rows start inside the thickness: contacts from the first substep
   c.friction = GENERATE(0.0, 0.3, 1.0);  // sliding, slowed, stuck (tan 30 deg = 0.58)
-  c.method = GENERATE(drape::CollisionMethod::Improved, drape::CollisionMethod::Vertex);
+  c.method = GENERATE(drape::CollisionMethod::Improved, drape::CollisionMethod::Vertex,
+                      drape::CollisionMethod::Baseline);
   INFO("friction " << c.friction << ", " << drape::toString(c.method));
   for (int substeps : {1, 3, 10}) {
     INFO(substeps << " substeps");
     c.subSteps = substeps;
     drape::Solver<float> cpu = drape::scenes::makeSlope<float>(c);
     drape::gpu::Solver gpu = makeGpuSlope(c);
-    // Two steps: contacts in every substep of the second.
+    // Two steps, with contacts (the improved methods' in every substep of both; the baseline's in the first: it
+    // turns the uphill rows' push out of the thickness into velocity, and they leave the slope for a while).
+    std::size_t touching = 0;
     for (int step = 0; step < 2; ++step) {
-      cpu.step(c.dt);
+      cpu.step(c.dt, [&](const drape::Solver<float>& s) {
+        touching = std::max(touching, s.contacts().liveVertices().size());
+      });
       gpu.step(c.dt);
     }
-    REQUIRE(cpu.contacts().liveVertices().size() >= 10);  // part of the uphill row touches in the last substep
+    REQUIRE(touching >= 10);  // part of the uphill row touches
     CHECK(largestGap(cpu, gpu) <= 1e-5);
     double speedGap = 0;
     for (Index i = 0; i < cpu.vertexCount(); ++i)
@@ -254,11 +259,11 @@ TEST_CASE("sliding down the slope, the GPU solver's cloth has the CPU's tremblin
   CHECK(b.maxStrain <= a.maxStrain + 1e-3);
 }
 
-TEST_CASE("the GPU solver names what it does not run yet", "[gpu]") {
+TEST_CASE("the GPU solver names what it does not run yet, and rejects bad settings before changing anything", "[gpu]") {
   const auto parts = drape::scenes::slopeParts<float>(drape::scenes::SlopeConfig{});
-  drape::Settings baseline = parts.settings;
-  baseline.collisionMethod = drape::CollisionMethod::Baseline;
-  CHECK_THROWS_WITH(drape::gpu::Solver(drape::test::gpuContext(), parts.asset, baseline), Catch::Contains("baseline"));
+  drape::Settings bad = parts.settings;
+  bad.iterationCount = 0;
+  CHECK_THROWS_WITH(drape::gpu::Solver(drape::test::gpuContext(), parts.asset, bad), Catch::Contains("iterationCount"));
   drape::gpu::Solver gpu(drape::test::gpuContext(), parts.asset, parts.settings);
   gpu.addSolid(parts.slope);
   drape::RigidWorld world;
@@ -266,8 +271,8 @@ TEST_CASE("the GPU solver names what it does not run yet", "[gpu]") {
   ball.shape = drape::Sphere{0.1};
   const int b = world.add(ball);
   CHECK_THROWS_WITH(drape::addCoupledBody(gpu, world, b), Catch::Contains("dynamic"));
-  CHECK_THROWS_WITH(gpu.setSettings(baseline), Catch::Contains("baseline"));
-  CHECK(gpu.settings().collisionMethod == drape::CollisionMethod::Improved);
+  CHECK_THROWS_WITH(gpu.setSettings(bad), Catch::Contains("iterationCount"));
+  CHECK(gpu.settings().iterationCount == parts.settings.iterationCount);
 }
 
 TEST_CASE("repulsion: a plane rising toward a cloth slows it alike on the GPU and the CPU", "[gpu]") {

@@ -101,7 +101,8 @@ class Solver {
         centre_("centre", shaders::centre),
         translate_("translate", shaders::translate),
         pinKernel_("pins", shaders::pins),
-        settle_("settle", shaders::settle) {
+        settle_("settle", shaders::settle),
+        frictionKernel_("friction", shaders::friction) {
     // The three sets, colour by colour, in one buffer: set s's colour c starts at offset_[s] + colourOffsets[c].
     std::vector<layout::Constraint> constraints;
     const DistanceSet<float>* sets[3] = {&asset_->stretch, &asset_->shear, &asset_->bending};
@@ -369,11 +370,7 @@ class Solver {
   }
 
   /// Settings the GPU runs (the rest are rejected by name).
-  static void check(const Settings& s) {
-    s.validate();
-    drape::detail::require(s.collisionMethod != CollisionMethod::Baseline,
-                           "the GPU solver has no baseline collision method (improved and vertex only)");
-  }
+  static void check(const Settings& s) { s.validate(); }
   template <class Shape> static void checkSupported(const Solid<Shape>& s) {
     drape::detail::require(s.motion != Motion::Dynamic, "coupled (dynamic) solids are CPU-only for now");
   }
@@ -477,6 +474,47 @@ class Solver {
     settle_.dispatch(std::size_t(vertexCount()));
   }
 
+  /// All contacts of a substep (projectAllContacts): per solid the vertex pass, then (a curved solid, when
+  /// `faces`) the face pass; where surfaces meet, the placement outside all of a vertex's contact planes and,
+  /// with several solids, the settle passes. The faces' buffer is bound here.
+  void projectAll(bool faces) {
+    faces = faces && settings_.collisionMethod != CollisionMethod::Vertex;
+    if (faces) faces_.bind(layout::kFaces);
+    for (std::size_t k = 0; k < passes_.size(); ++k) {
+      vertexPass(passes_[k], k == 0, -1, 0.0f);
+      if (faces && passes_[k].curved) facePass(passes_[k]);
+    }
+    if (!reconcile_) return;
+    settle(-1);
+    if (passes_.size() < 2) return;
+    glClearNamedBufferData(flags_.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, nullptr);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    const float slack = 1e-4f * float(settings_.thickness);
+    for (int pass = 0; pass < kSettlePasses; ++pass) {
+      for (const SolidPass& p : passes_) vertexPass(p, false, pass, slack);
+      settle(pass);
+    }
+  }
+
+  /// The baseline method's collisions inside the solve (collideBaseline), on the positions the solve has reached:
+  /// those go to the positions' buffer, the contacts are projected there (pinched vertices start from the
+  /// prediction) with position friction, and the result goes back to the solve's.
+  void collideInSolve(float h) {
+    const auto bytes = GLsizeiptr(std::size_t(vertexCount()) * sizeof(layout::Vertex));
+    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+    glCopyNamedBufferSubData(packed_.id(), positions_.id(), 0, 0, bytes);  // both hold the inverse mass in w
+    predicted_.bind(layout::kPacked);  // the settle placement's reference: the prediction, as on the CPU
+    projectAll(true);
+    packed_.bind(layout::kPacked);
+    if (friction_) {
+      frictionKernel_.set(layout::kCount, unsigned(vertexCount()));
+      frictionKernel_.set(layout::kStep, h);
+      frictionKernel_.dispatch(std::size_t(vertexCount()));
+    }
+    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+    glCopyNamedBufferSubData(positions_.id(), packed_.id(), 0, 0, bytes);
+  }
+
   void subStep(double hd) {
     const float h = float(hd);
     const auto n = unsigned(vertexCount());
@@ -540,6 +578,7 @@ class Solver {
       pinKernel_.set(layout::kCount, unsigned(pins_.size()));
       pinKernel_.set(layout::kAlphaTilde, float(settings_.pinCompliance) / h2);
     }
+    const bool baseline = settings_.collisionMethod == CollisionMethod::Baseline && !passes_.empty();
     for (int it = 0; it < iterations; ++it) {
       for (int s = 0; s < 3; ++s) {
         solve_.set(layout::kAlphaTilde, alphas[s]);
@@ -557,6 +596,7 @@ class Solver {
         glDispatchCompute(1, 1, 1);
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
       }
+      if (baseline) collideInSolve(h);
     }
 
     // 3. update velocity
@@ -564,34 +604,19 @@ class Solver {
     update_.set(layout::kInverseStep, 1.0f / h);
     update_.dispatch(n);
 
-    // 4. collide (DESIGN 3, 4): per solid, project vertices, then (a curved solid, improved method) faces; where
-    //    surfaces meet, settle; split; propagate (projectAllContacts and collide on the CPU)
-    if (passes_.empty()) return;
-    const bool faces = settings_.collisionMethod == CollisionMethod::Improved;
-    if (faces) faces_.bind(layout::kFaces);
-    for (std::size_t k = 0; k < passes_.size(); ++k) {
-      vertexPass(passes_[k], k == 0, -1, 0.0f);
-      if (faces && passes_[k].curved) facePass(passes_[k]);
-    }
-    if (reconcile_) {
-      settle(-1);
-      if (passes_.size() > 1) {
-        glClearNamedBufferData(flags_.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, nullptr);
-        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-        const float slack = 1e-4f * float(settings_.thickness);
-        for (int pass = 0; pass < kSettlePasses; ++pass) {
-          for (const SolidPass& p : passes_) vertexPass(p, false, pass, slack);
-          settle(pass);
-        }
-      }
-    }
+    // 4. collide (DESIGN 3, 4): per solid, project vertices, then faces; where surfaces meet, settle; split;
+    //    propagate (collide on the CPU). The baseline method collided inside the solve instead.
+    if (passes_.empty() || baseline) return;
+    projectAll(true);
     const Program& respond = friction_ ? respondFriction_ : respond_;
     respond.set(layout::kCount, n);
     respond.set(layout::kStep, h);
     respond.set(layout::kInverseStep, 1.0f / h);
     respond.set(layout::kNormalDamping, float(settings_.normalDamping));
     respond.dispatch(n);
-    if (!faces || settings_.propagationRings <= 0 || !(settings_.propagationWeight > 0)) return;
+    if (settings_.collisionMethod != CollisionMethod::Improved || settings_.propagationRings <= 0 ||
+        !(settings_.propagationWeight > 0))
+      return;
     glClearNamedBufferData(rings_.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, nullptr);
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
     propagate_.set(layout::kCount, n);
@@ -659,7 +684,8 @@ class Solver {
   std::vector<ShapeData> shapeData_;  ///< every grid and hull the solids use, uploaded once each
   Buffer<std::uint32_t> flags_;   ///< per settle pass: whether its vertex passes found a contact
   static constexpr int kSettlePasses = 4;  ///< extra vertex passes where solids meet (BasicSolver::kSettlePasses)
-  Program predict_, solve_, update_, respond_, respondFriction_, propagate_, centre_, translate_, pinKernel_, settle_;
+  Program predict_, solve_, update_, respond_, respondFriction_, propagate_, centre_, translate_, pinKernel_, settle_,
+      frictionKernel_;
   std::vector<Pin> pins_;  ///< targets in world coordinates (uploaded each substep, in the local frame then)
   Buffer<layout::PinSlot> pinSlots_;
   Buffer<float> pinLambdas_;
