@@ -22,6 +22,12 @@ layout(location = DRAPE_U_SOLID_LINEAR) uniform vec3 linearVelocity;
 layout(location = DRAPE_U_SOLID_ANGULAR) uniform vec3 angularVelocity;
 layout(location = DRAPE_U_PGD_ITERATIONS) uniform int maxIterations;
 layout(location = DRAPE_U_FRICTION) uniform vec2 friction;  // static, dynamic
+#if DRAPE_BODY
+layout(std430, binding = DRAPE_B_LINES) buffer LinesBuffer { Lines lines[]; };
+layout(location = DRAPE_U_BODY) uniform int body;  // the coupled body this solid pushes
+#else
+const int body = -1;
+#endif
 
 const int kMaxCuts = 16;
 const int kMaxVertices = 2 * kMaxCuts + 6;
@@ -79,7 +85,7 @@ void main() {
   const float phiC = sdf(middle, gradC);
   if (phiC > radius + thickness) return;
 
-  vec3 qb = vec3(1.0 / 3.0), qn = gradC;
+  vec3 qb = vec3(1.0 / 3.0), qn = gradC, qp = middle;
   float qphi = phiC;
   int evaluations = 1;
   precise const vec3 e1 = x1 - x0, e2 = x2 - x0;
@@ -104,7 +110,7 @@ void main() {
     vec3 n;
     const float phi = sdf(p, n);
     ++evaluations;
-    if (phi < qphi) qb = bb, qn = n, qphi = phi;
+    if (phi < qphi) qb = bb, qn = n, qphi = phi, qp = p;
     if (qphi - lower <= tolerance) break;
     const vec3 cut = cutAt(bb, phi, n, e1, e2);
     if (cutCount == kMaxCuts) {  // keep the cuts active at the model's minimum
@@ -173,7 +179,7 @@ void main() {
       precise const float bbStep = dot3(stepB, stepB) / sy;
       alpha = sy > 0.0 ? bbStep : 2.0 * alpha;
       slope = next;
-      qb = bb, qn = n, qphi = phi;
+      qb = bb, qn = n, qphi = phi, qp = p;
     } else {
       alpha *= 0.5;
     }
@@ -186,6 +192,7 @@ void main() {
   precise const float denom = dot3(wb, qb);
   if (denom <= 0.0) return;
   precise const float depth = thickness - qphi;
+  precise const vec3 placed = qp + depth * qn;  // where the moves carry the deepest point (a body's push acts there)
   for (int k = 0; k < 3; ++k) {
     if (wb[k] <= 0.0) continue;
     const uint vi = t[k];
@@ -194,7 +201,14 @@ void main() {
     precise const vec3 moved = xv.xyz + dn * qn;
     x[vi] = vec4(moved, xv.w);
     Contact ct = contacts[vi];
-    recordContact(ct, moved, qn, dn, solidVelocityAt(moved, centre, linearVelocity, angularVelocity), friction, -1);
+    const vec3 vc = solidVelocityAt(moved, centre, linearVelocity, angularVelocity);
+#if DRAPE_BODY
+    lineRecord = lines[vi];
+    recordContact(ct, moved, qn, dn, vc, friction, body, momentAbout(placed, centre, qn));
+    lines[vi] = lineRecord;
+#else
+    recordContact(ct, moved, qn, dn, vc, friction, body, vec3(0.0));
+#endif
     contacts[vi] = ct;
   }
 }

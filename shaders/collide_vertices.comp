@@ -1,7 +1,8 @@
 // DESIGN 4, the vertex pass (the CPU twin: projectVertexContactsAs in include/drape/collision/response.hpp) for
 // one solid: a free vertex closer to the solid than the thickness (by more than the slack) moves out along the
 // field's gradient to the thickness, and its contact is recorded for the response (recordContact): normal and
-// correction, the solid's velocity at the placed point, its friction. The substep's first pass (fresh) starts
+// correction, the solid's velocity at the placed point, its friction (and for a coupled body, the line its push
+// acts on: the placed point). The substep's first pass (fresh) starts
 // every vertex's record, so nothing is cleared. In a settle pass (pass >= 0) the dispatch does nothing unless
 // the pass before found a contact, and a contact found marks this pass's flag: the CPU's loop that stops once a
 // pass finds none, without reading anything back.
@@ -15,6 +16,12 @@ layout(location = DRAPE_U_SOLID_CENTRE) uniform vec3 centre;
 layout(location = DRAPE_U_SOLID_LINEAR) uniform vec3 linearVelocity;
 layout(location = DRAPE_U_SOLID_ANGULAR) uniform vec3 angularVelocity;
 layout(location = DRAPE_U_FRICTION) uniform vec2 friction;  // static, dynamic
+#if DRAPE_BODY
+layout(std430, binding = DRAPE_B_LINES) buffer LinesBuffer { Lines lines[]; };
+layout(location = DRAPE_U_BODY) uniform int body;  // the coupled body this solid pushes
+#else
+const int body = -1;
+#endif
 layout(location = DRAPE_U_SLACK) uniform float slack;
 layout(location = DRAPE_U_PASS) uniform int pass;
 layout(location = DRAPE_U_FRESH) uniform uint fresh;
@@ -34,7 +41,14 @@ void main() {
       precise const vec3 p = xi.xyz + dn * n;
       x[i] = vec4(p, xi.w);
       Contact c = fresh != 0u ? emptyContact() : contacts[i];
-      recordContact(c, p, n, dn, solidVelocityAt(p, centre, linearVelocity, angularVelocity), friction, -1);
+      const vec3 vc = solidVelocityAt(p, centre, linearVelocity, angularVelocity);
+#if DRAPE_BODY
+      lineRecord = lines[i];
+      recordContact(c, p, n, dn, vc, friction, body, momentAbout(p, centre, n));
+      lines[i] = lineRecord;
+#else
+      recordContact(c, p, n, dn, vc, friction, body, vec3(0.0));
+#endif
       contacts[i] = c;
       found = true;
     }

@@ -38,11 +38,26 @@ Contact emptyContact() {
   return c;
 }
 
+#if DRAPE_BODY
+// A coupled body's kernels keep where each slot's push acts (ContactLine): the caller loads the vertex's lines
+// here before recordContact and stores them after.
+Lines lineRecord;
+#endif
+
+// (a - centre) x n, written out as the CPU's Eigen cross product computes it: a contact's moment about a body.
+vec3 momentAbout(vec3 a, vec3 centre, vec3 n) {
+  precise const vec3 r = a - centre;
+  precise const vec3 m = vec3(r.y * n.z - r.z * n.y, r.z * n.x - r.x * n.z, r.x * n.y - r.y * n.x);
+  return m;
+}
+
 // Records that the vertex was placed at x, dn along n, out of a solid whose velocity there is vc
 // (ContactBuffer::record and recordMore): a new direction takes a free slot; the same surface seen again (the
 // normals within kMergeCos) takes the latest normal and placement; a direction that finds every slot taken joins
-// the closest, whose normal stays, and marks the record overflowed. The corrections add up.
-void recordContact(inout Contact c, vec3 x, vec3 n, float dn, vec3 vc, vec2 friction, int body) {
+// the closest, whose normal stays, and marks the record overflowed. The corrections add up. In a coupled body's
+// kernels (DRAPE_BODY) the slot's line takes this contact's share of its push and moment (`moment` about the
+// body's centre); other solids' kernels write no line.
+void recordContact(inout Contact c, vec3 x, vec3 n, float dn, vec3 vc, vec2 friction, int body, vec3 moment) {
   const uint count = c.slots.x;
   if (count == 0u) {
     c.slots = uvec4(1u, 0u, 0u, 0u);
@@ -50,6 +65,10 @@ void recordContact(inout Contact c, vec3 x, vec3 n, float dn, vec3 vc, vec2 fric
     c.velocity[0] = vec4(vc, dot3(n, x));
     c.friction[0] = vec4(friction, 0.0, 0.0);
     c.body[0] = body;
+#if DRAPE_BODY
+    lineRecord.push[0] = vec4(n, 0.0);
+    lineRecord.moment[0] = vec4(moment, 0.0);
+#endif
     return;
   }
   int best = -1;
@@ -63,6 +82,10 @@ void recordContact(inout Contact c, vec3 x, vec3 n, float dn, vec3 vc, vec2 fric
     c.velocity[count] = vec4(vc, dot3(n, x));
     c.friction[count] = vec4(friction, 0.0, 0.0);
     c.body[count] = body;
+#if DRAPE_BODY
+    lineRecord.push[count] = vec4(n, 0.0);
+    lineRecord.moment[count] = vec4(moment, 0.0);
+#endif
     c.slots.x = count + 1u;
     return;
   }
@@ -75,6 +98,17 @@ void recordContact(inout Contact c, vec3 x, vec3 n, float dn, vec3 vc, vec2 fric
     }
   }
   precise const float total = c.normal[best].w + dn;
+#if DRAPE_BODY
+  if (c.body[best] != body) {
+    if (bestCos >= kMergeCos) lineRecord.push[best] = vec4(n, 0.0), lineRecord.moment[best] = vec4(moment, 0.0);
+  } else if (total > 0.0) {  // this contact's share of the slot's push and moment
+    precise const float share = dn / total;
+    precise const vec3 push = lineRecord.push[best].xyz + share * (n - lineRecord.push[best].xyz);
+    precise const vec3 mom = lineRecord.moment[best].xyz + share * (moment - lineRecord.moment[best].xyz);
+    lineRecord.push[best] = vec4(push, 0.0);
+    lineRecord.moment[best] = vec4(mom, 0.0);
+  }
+#endif
   if (bestCos >= kMergeCos) {
     c.normal[best] = vec4(n, total);
     c.velocity[best] = vec4(vc, dot3(n, x));

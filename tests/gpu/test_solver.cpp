@@ -270,7 +270,9 @@ TEST_CASE("the GPU solver names what it does not run yet, and rejects bad settin
   drape::BodyDesc ball;
   ball.shape = drape::Sphere{0.1};
   const int b = world.add(ball);
-  CHECK_THROWS_WITH(drape::addCoupledBody(gpu, world, b), Catch::Contains("dynamic"));
+  drape::CouplingDesc repelled;
+  repelled.repulsion.radius = 0.02;
+  CHECK_THROWS_WITH(drape::addCoupledBody(gpu, world, b, repelled), Catch::Contains("repulsion"));
   CHECK_THROWS_WITH(gpu.setSettings(bad), Catch::Contains("iterationCount"));
   CHECK(gpu.settings().iterationCount == parts.settings.iterationCount);
 }

@@ -34,6 +34,14 @@ enum Binding : unsigned {
   kPinLambdas = 14,       ///< float per pin: its XPBD multiplier in the current substep
   kShapeData = 15,        ///< vec4s: a grid field's nodes ((normal, distance), x fastest) or a hull's faces and edges
   kFlags = 16,            ///< uint per settle pass: 1 once a vertex pass of that pass found a contact
+  // The coupling with dynamic bodies (only in a scene that has them):
+  kVStart = 17,           ///< vec4 per vertex: the velocity at the start of the substep
+  kVPre = 18,             ///< vec4 per vertex: the velocity before the contacts acted
+  kLines = 19,            ///< Lines per vertex: where each body slot's push acts (ContactLine)
+  kPushes = 20,           ///< BodyPush[kContactSlots] per vertex: what the vertex passes to bodies this substep
+  kBodies = 21,           ///< Body per coupled body
+  kBodySums = 22,         ///< BodySum per coupled body: the pushes summed by kind
+  kShares = 23,           ///< float per coupled body: the share of its exchange both sides take
 };
 
 /// Uniform locations (set per dispatch with glProgramUniform*).
@@ -60,6 +68,11 @@ enum Uniform : int {
   kSlack = 20,          ///< float: a vertex pass leaves vertices within this of the thickness where they are (m)
   kPass = 21,           ///< int: the settle pass a dispatch belongs to (0-3), -1 for the substep's first pass
   kFresh = 22,          ///< uint: 1 for the substep's first vertex pass, which starts every vertex's record
+  kBody = 23,           ///< int: the coupled body a solid's contacts push (its index this substep)
+  kEstimator = 24,      ///< int: the contact-force estimator (0 sub-force, 1 energy, 2 impulse)
+  kNormalOnly = 25,     ///< uint: 1 to pass bodies only the normal part of each push
+  kPropagated = 26,     ///< uint: 1 to pass on the impulse propagation gave vertices not in contact
+  kBodyCount = 27,      ///< uint: how many coupled bodies
   kShape = 32,  ///< vec4[5] (locations 32-36): the solid's field, packed by packShape (gpu/shapes.hpp)
 };
 
@@ -94,6 +107,42 @@ struct Contact {
 static_assert(sizeof(Contact) == 192 && alignof(Contact) == 4);
 static_assert(offsetof(Contact, velocity) == 48 && offsetof(Contact, friction) == 96 && offsetof(Contact, body) == 144 &&
               offsetof(Contact, slots) == 160 && offsetof(Contact, normalDv) == 176);
+
+/// Where each body slot's push acts (the CPU's ContactLine per slot): the mean normal of its contacts, and
+/// their mean moment about the body's centre, weighted by their corrections.
+struct Lines {
+  float push[kContactSlots][4];
+  float moment[kContactSlots][4];
+};
+static_assert(sizeof(Lines) == 96 && offsetof(Lines, moment) == 48);
+
+/// What a vertex passes to one body this substep: the force (N, w: |f|^2 / m for an exchange) and the torque
+/// about the body's centre (N m); the body (-1: none) and the kind (0 direct, 1 exchange, 2 pinch).
+struct BodyPush {
+  float force[4];
+  float torque[4];
+  std::int32_t body, kind, pad[2];
+};
+static_assert(sizeof(BodyPush) == 48 && offsetof(BodyPush, torque) == 16 && offsetof(BodyPush, body) == 32);
+
+/// A coupled body as the force kernel reads it: its centre (m, the cloth's local frame) with its inverse mass in
+/// w, its velocities, and the rows of its inverse inertia tensor in world axes.
+struct Body {
+  float centre[4];
+  float linear[4];
+  float angular[4];
+  float inverseInertia[3][4];
+};
+static_assert(sizeof(Body) == 96 && offsetof(Body, inverseInertia) == 48);
+
+/// A body's pushes summed (in double) by kind: force and torque each, with the exchange's sum of |f|^2 / m in
+/// exchangeForce[3] and the pinch count in pinchForce[3].
+struct BodySum {
+  double directForce[4], directTorque[4];
+  double exchangeForce[4], exchangeTorque[4];
+  double pinchForce[4], pinchTorque[4];
+};
+static_assert(sizeof(BodySum) == 192 && offsetof(BodySum, exchangeForce) == 64 && offsetof(BodySum, pinchForce) == 128);
 
 /// What propagation ring `reached` passed to a vertex: the share it offers the next ring (amount, m/s), along
 /// the mean normal of its sources, relative to their mean solid velocity. reached is 0 before any ring.
@@ -174,14 +223,32 @@ inline std::string preamble(const std::string& defines = {}) {
   s += define("DRAPE_U_PASS", kPass);
   s += define("DRAPE_U_FRESH", kFresh);
   s += define("DRAPE_CONTACT_SLOTS", kContactSlots);
+  s += define("DRAPE_B_V_START", kVStart);
+  s += define("DRAPE_B_V_PRE", kVPre);
+  s += define("DRAPE_B_LINES", kLines);
+  s += define("DRAPE_B_PUSHES", kPushes);
+  s += define("DRAPE_B_BODIES", kBodies);
+  s += define("DRAPE_B_BODY_SUMS", kBodySums);
+  s += define("DRAPE_B_SHARES", kShares);
+  s += define("DRAPE_U_BODY", kBody);
+  s += define("DRAPE_U_ESTIMATOR", kEstimator);
+  s += define("DRAPE_U_NORMAL_ONLY", kNormalOnly);
+  s += define("DRAPE_U_PROPAGATED", kPropagated);
+  s += define("DRAPE_U_BODY_COUNT", kBodyCount);
   // A kernel compiled without a choice gets the plane and friction (so every kernel compiles on its own).
   s += "#ifndef DRAPE_SHAPE\n#define DRAPE_SHAPE DRAPE_SHAPE_PLANE\n#endif\n";
   s += "#ifndef DRAPE_FRICTION\n#define DRAPE_FRICTION 1\n#endif\n";
+  s += "#ifndef DRAPE_BODY\n#define DRAPE_BODY 0\n#endif\n";
   s += "struct Constraint { uint a; uint b; float rest; uint pad; };\n";
   s += "struct Contact { vec4 normal[DRAPE_CONTACT_SLOTS]; vec4 velocity[DRAPE_CONTACT_SLOTS]; "
        "vec4 friction[DRAPE_CONTACT_SLOTS]; ivec4 body; uvec4 slots; vec4 normalDv; };\n";
   s += "struct Ring { vec4 normal; vec4 velocity; float amount; uint reached; uint pad0; uint pad1; };\n";
   s += "struct PinSlot { vec3 target; uint vertex; };\n";
+  s += "struct Lines { vec4 push[DRAPE_CONTACT_SLOTS]; vec4 moment[DRAPE_CONTACT_SLOTS]; };\n";
+  s += "struct BodyPush { vec4 force; vec4 torque; int body; int kind; int pad0; int pad1; };\n";
+  s += "struct Body { vec4 centre; vec4 linear; vec4 angular; vec4 inverseInertia[3]; };\n";
+  s += "struct BodySum { dvec4 directForce; dvec4 directTorque; dvec4 exchangeForce; dvec4 exchangeTorque; "
+       "dvec4 pinchForce; dvec4 pinchTorque; };\n";
   return s;
 }
 

@@ -102,7 +102,10 @@ class Solver {
         translate_("translate", shaders::translate),
         pinKernel_("pins", shaders::pins),
         settle_("settle", shaders::settle),
-        frictionKernel_("friction", shaders::friction) {
+        frictionKernel_("friction", shaders::friction),
+        contactForces_("contact_forces", shaders::contact_forces),
+        bodySumKernel_("body_sums", shaders::body_sums),
+        shareKernel_("share", shaders::share) {
     // The three sets, colour by colour, in one buffer: set s's colour c starts at offset_[s] + colourOffsets[c].
     std::vector<layout::Constraint> constraints;
     const DistanceSet<float>* sets[3] = {&asset_->stretch, &asset_->shear, &asset_->bending};
@@ -148,7 +151,7 @@ class Solver {
     drape::detail::validateSolid(solid, "solid");
     checkSupported(solid);
     context_->makeCurrent();
-    compileFor<Shape>();
+    compileFor<Shape>(solid.motion == Motion::Dynamic);
     auto compiled = drape::detail::compileSolid<Shape, float>(solid, state_.origin);
     uploadShapeData(compiled);
     auto& list = std::get<std::vector<Solid<Shape>>>(solids_);
@@ -169,6 +172,7 @@ class Solver {
     drape::detail::validateSolid(s, "solid " + std::to_string(k));
     checkSupported(s);
     context_->makeCurrent();
+    compileFor<Shape>(s.motion == Motion::Dynamic);
     auto compiled = drape::detail::compileSolid<Shape, float>(s, state_.origin);
     uploadShapeData(compiled);
     list[std::size_t(k)] = s;
@@ -189,6 +193,11 @@ class Solver {
         },
         solids_);
   }
+
+  /// The force and torque (about its centre) the cloth passed to each coupled body in the last substep (N, N m),
+  /// in the order of the solids (by shape type, then as added).
+  const std::vector<Eigen::Vector3d>& bodyForces() const { return bodyForce_; }
+  const std::vector<Eigen::Vector3d>& bodyTorques() const { return bodyTorque_; }
 
   const ClothAsset<float>& asset() const { return *asset_; }
   Index vertexCount() const { return asset_->vertexCount(); }
@@ -323,14 +332,22 @@ class Solver {
   }
 
   /// The shape's vertex, face and repulsion kernels (the face pass only for a curved one), once per shape type.
-  template <class Shape> void compileFor() {
+  template <class Shape> void compileFor(bool body) {
     ShapeKernels& k = kernels_[shapeCode<Shape>()];
-    if (k.ready) return;
     const std::string define = shapeDefine<Shape>();
-    k.vertices = Program("collide_vertices", shaders::collide_vertices, define);
-    k.repel = Program("repel", shaders::repel, define);
-    if constexpr (!Sdf<Shape, float>::kLinear) k.faces = Program("collide_faces", shaders::collide_faces, define);
-    k.ready = true;
+    if (!k.ready) {
+      k.vertices = Program("collide_vertices", shaders::collide_vertices, define);
+      k.repel = Program("repel", shaders::repel, define);
+      if constexpr (!Sdf<Shape, float>::kLinear) k.faces = Program("collide_faces", shaders::collide_faces, define);
+      k.ready = true;
+    }
+    if (body && !k.bodyReady) {  // a coupled body's twins, which keep where each push acts
+      const std::string bodyDefine = define + "#define DRAPE_BODY 1\n";
+      k.verticesBody = Program("collide_vertices", shaders::collide_vertices, bodyDefine);
+      if constexpr (!Sdf<Shape, float>::kLinear)
+        k.facesBody = Program("collide_faces", shaders::collide_faces, bodyDefine);
+      k.bodyReady = true;
+    }
   }
 
   /// The shape data a solid's field reads from its own buffer (layout::kShapeData): a mesh's grid nodes, a hull's
@@ -372,7 +389,8 @@ class Solver {
   /// Settings the GPU runs (the rest are rejected by name).
   static void check(const Settings& s) { s.validate(); }
   template <class Shape> static void checkSupported(const Solid<Shape>& s) {
-    drape::detail::require(s.motion != Motion::Dynamic, "coupled (dynamic) solids are CPU-only for now");
+    drape::detail::require(s.motion != Motion::Dynamic || !(s.repulsion.radius > 0),
+                           "a coupled (dynamic) solid's repulsion region is CPU-only for now");
   }
 
   /// p to the nearest multiple of 1/64 m in each coordinate: a shift by it is exact in float.
@@ -403,6 +421,8 @@ class Solver {
   /// kinematic (prepareSolids) and its field packed for the kernels (packShape).
   void prepareSolids(double hd) {
     passes_.clear();
+    bodies_.clear();
+    bodyCentre_.clear();
     friction_ = repulsive_ = reconcile_ = false;
     std::apply(
         [&](auto&... lists) {
@@ -417,6 +437,11 @@ class Solver {
                   const CompiledSolid<Shape, float>& compiled = out[k];
                   SolidPass p{shapeCode<Shape>(), packShape(compiled.sdf), compiled.motion, !Sdf<Shape, float>::kLinear,
                               compiled.repulsionRadius, compiled.falloff, shapeData(shapeDataKey(compiled))};
+                  if (held.motion == Motion::Dynamic) {
+                    p.motion.body = std::int32_t(bodies_.size());
+                    bodies_.push_back(held.body);
+                    bodyCentre_.push_back(held.pose.position);  // the field's centre, not the body's now
+                  }
                   friction_ = friction_ || p.motion.staticFriction > 0 || p.motion.dynamicFriction > 0;
                   repulsive_ = repulsive_ || p.repulsionRadius > 0;
                   reconcile_ = reconcile_ || p.curved;
@@ -427,6 +452,14 @@ class Solver {
         },
         solids_);
     reconcile_ = reconcile_ || passes_.size() > 1;
+    coupled_ = !bodies_.empty();
+    if (coupled_ && vStart_.size() != state_.x.size()) {  // the coupling's buffers, once a scene has a body
+      const std::vector<layout::Vertex> zero(state_.x.size(), layout::Vertex{0, 0, 0, 0});
+      vStart_.assign(zero);
+      vPre_.assign(zero);
+      lines_.assign(std::vector<layout::Lines>(zero.size(), layout::Lines{}));
+      pushes_.assign(std::vector<layout::BodyPush>(zero.size() * layout::kContactSlots, layout::BodyPush{}));
+    }
   }
 
   /// A collision kernel's uniforms for one solid (its field, motion and friction), and its grid's nodes bound.
@@ -439,12 +472,13 @@ class Solver {
     k.set(layout::kSolidAngular, m.angularVelocity.x(), m.angularVelocity.y(), m.angularVelocity.z());
     glProgramUniform2f(k.id(), layout::kFriction, m.staticFriction, m.dynamicFriction);
     if (p.data) p.data->bind(layout::kShapeData);
+    if (m.body >= 0) glProgramUniform1i(k.id(), layout::kBody, m.body);
   }
 
   /// One solid's vertex pass (projectVertexContacts): `fresh` for the substep's first, which starts every
   /// record; `pass` the settle pass (-1: the first pass), `slack` what the settle passes leave alone.
   void vertexPass(const SolidPass& p, bool fresh, int pass, float slack) {
-    const Program& k = kernels_[p.code].vertices;
+    const Program& k = p.motion.body >= 0 ? kernels_[p.code].verticesBody : kernels_[p.code].vertices;
     setSolidUniforms(k, p);
     k.set(layout::kCount, unsigned(vertexCount()));
     k.set(layout::kSlack, slack);
@@ -455,7 +489,7 @@ class Solver {
 
   /// One curved solid's face pass (projectFaceContacts), colour by colour.
   void facePass(const SolidPass& p) {
-    const Program& k = kernels_[p.code].faces;
+    const Program& k = p.motion.body >= 0 ? kernels_[p.code].facesBody : kernels_[p.code].faces;
     setSolidUniforms(k, p);
     glProgramUniform1i(k.id(), layout::kPgdIterations, settings_.pgdIterations);
     for (std::size_t c = 0; c + 1 < faceColourOffsets_.size(); ++c) {
@@ -472,6 +506,84 @@ class Solver {
     settle_.set(layout::kCount, unsigned(vertexCount()));
     glProgramUniform1i(settle_.id(), layout::kPass, pass);
     settle_.dispatch(std::size_t(vertexCount()));
+  }
+
+  /// v into `to` (the estimators' velocities at the substep's start and before the contacts).
+  void copyVelocities(const Buffer<layout::Vertex>& to) {
+    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+    glCopyNamedBufferSubData(velocities_.id(), to.id(), 0, 0,
+                             GLsizeiptr(std::size_t(vertexCount()) * sizeof(layout::Vertex)));
+  }
+
+  /// Phase 2 (DESIGN 6, gatherContactForces): the pushes of every vertex (contact_forces.comp), summed per body
+  /// in double (body_sums.comp); the sums (192 bytes a body) are read back, each body's exchange shared with the
+  /// vertices that made it (shareExchanges: share.comp scales those vertices' changes where a body took less
+  /// than all), and the forces applied to the bodies before they move.
+  void gatherContactForces(float h) {
+    const auto n = unsigned(vertexCount());
+    const std::size_t nb = bodies_.size();
+    bodyForce_.assign(nb, Eigen::Vector3d::Zero());
+    bodyTorque_.assign(nb, Eigen::Vector3d::Zero());
+    std::vector<layout::Body> data(nb);
+    for (std::size_t b = 0; b < nb; ++b) {
+      const CoupledBody& body = *bodies_[b];
+      const Vec3<float> c = (bodyCentre_[b] - state_.origin).cast<float>();
+      const Vec3<float> lin = body.linearVelocity().cast<float>(), ang = body.angularVelocity().cast<float>();
+      const Eigen::Matrix3f inertia = body.inverseInertiaWorld().cast<float>();
+      layout::Body& d = data[b];
+      d = layout::Body{{c.x(), c.y(), c.z(), float(body.inverseMass())}, {lin.x(), lin.y(), lin.z(), 0},
+                       {ang.x(), ang.y(), ang.z(), 0}, {}};
+      for (int r = 0; r < 3; ++r)
+        for (int k = 0; k < 3; ++k) d.inverseInertia[r][k] = inertia(r, k);
+    }
+    if (bodyData_.size() != nb) {
+      bodyData_.assign(data);
+      bodySums_.assign(std::vector<layout::BodySum>(nb));
+      shares_.assign(std::vector<float>(nb, 1.0f));
+    } else {
+      bodyData_.write(data);
+    }
+    bodyData_.bind(layout::kBodies);
+    bodySums_.bind(layout::kBodySums);
+    shares_.bind(layout::kShares);
+    const ContactForce estimator = settings_.contactForce;
+    const bool propagated = estimator == ContactForce::Impulse && settings_.propagationRings > 0 &&
+                            settings_.propagationWeight > 0 && settings_.collisionMethod == CollisionMethod::Improved;
+    contactForces_.set(layout::kCount, n);
+    contactForces_.set(layout::kStep, h);
+    contactForces_.set(layout::kThickness, float(settings_.thickness));
+    glProgramUniform1i(contactForces_.id(), layout::kEstimator,
+                       estimator == ContactForce::SubForce ? 0 : estimator == ContactForce::Energy ? 1 : 2);
+    contactForces_.set(layout::kNormalOnly, unsigned(settings_.normalForceOnly));
+    contactForces_.set(layout::kPropagated, unsigned(propagated));
+    contactForces_.dispatch(n);
+    bodySumKernel_.set(layout::kCount, n);
+    glUseProgram(bodySumKernel_.id());
+    glDispatchCompute(GLuint(nb), 1, 1);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+    const std::vector<layout::BodySum> sums = bodySums_.read();
+    std::vector<float> share(nb, 1.0f);
+    bool partial = false;
+    for (std::size_t b = 0; b < nb; ++b) {
+      const layout::BodySum& sum = sums[b];
+      auto vec = [](const double* v) { return Eigen::Vector3d(v[0], v[1], v[2]); };
+      CoupledBody& body = *bodies_[b];
+      const Eigen::Vector3d ef = vec(sum.exchangeForce), et = vec(sum.exchangeTorque);
+      const double bodySide = body.inverseMass() * ef.squaredNorm() + et.dot(body.inverseInertiaWorld() * et);
+      const double vertexSide = sum.exchangeForce[3];
+      const double s = bodySide > 0 ? vertexSide / (vertexSide + bodySide) : 1.0;
+      Eigen::Vector3d force = vec(sum.directForce) + s * ef, torque = vec(sum.directTorque) + s * et;
+      if (sum.pinchForce[3] > 0) force += vec(sum.pinchForce) / sum.pinchForce[3], torque += vec(sum.pinchTorque) / sum.pinchForce[3];
+      body.applyForceAndTorque(force, torque);
+      bodyForce_[b] = force;
+      bodyTorque_[b] = torque;
+      share[b] = float(s);
+      partial = partial || s < 1;
+    }
+    if (!partial) return;
+    shares_.write(share);
+    shareKernel_.set(layout::kCount, n);
+    shareKernel_.dispatch(n);
   }
 
   /// All contacts of a substep (projectAllContacts): per solid the vertex pass, then (a curved solid, when
@@ -531,6 +643,12 @@ class Solver {
     neighbours_.bind(layout::kNeighbours);
     rings_.bind(layout::kPropagation);
     flags_.bind(layout::kFlags);
+    if (coupled_) {
+      vStart_.bind(layout::kVStart);
+      vPre_.bind(layout::kVPre);
+      lines_.bind(layout::kLines);
+      pushes_.bind(layout::kPushes);
+    }
 
     // 0. repulsion (phase 1), for each solid that has a region
     if (repulsive_) {
@@ -545,12 +663,14 @@ class Solver {
       }
     }
 
+    if (coupled_) copyVelocities(vStart_);  // the estimators' velocity at the start of the substep
+
     // 1. predict
     const Vec3<float> gh = (settings_.gravity * double(h)).cast<float>();
     predict_.set(layout::kCount, n);
     predict_.set(layout::kStep, h);
     predict_.set(layout::kGravityStep, gh.x(), gh.y(), gh.z());
-    predict_.set(layout::kKeepStart, unsigned(friction_));
+    predict_.set(layout::kKeepStart, unsigned(friction_ || coupled_));
     predict_.dispatch(n);
 
     // 2. solve, set by set and colour by colour, as the CPU solver orders them
@@ -606,8 +726,18 @@ class Solver {
 
     // 4. collide (DESIGN 3, 4): per solid, project vertices, then faces; where surfaces meet, settle; split;
     //    propagate (collide on the CPU). The baseline method collided inside the solve instead.
-    if (passes_.empty() || baseline) return;
-    projectAll(true);
+    if (coupled_) copyVelocities(vPre_);  // before any contact acts
+    if (!passes_.empty() && !baseline) {
+      projectAll(true);
+      respondAndPropagate(h);
+    }
+    // 5. the cloth's push on the coupled bodies, applied before they move (DESIGN 6)
+    if (coupled_) gatherContactForces(h);
+  }
+
+  /// The velocity split, then propagation (collide's second half).
+  void respondAndPropagate(float h) {
+    const auto n = unsigned(vertexCount());
     const Program& respond = friction_ ? respondFriction_ : respond_;
     respond.set(layout::kCount, n);
     respond.set(layout::kStep, h);
@@ -674,7 +804,8 @@ class Solver {
   bool reconcile_ = false;   ///< a vertex may touch several surfaces this substep (a curved solid, or several)
   struct ShapeKernels {  ///< the collision kernels compiled for one shape type (compileFor)
     Program vertices, faces, repel;
-    bool ready = false;
+    Program verticesBody, facesBody;  ///< for a coupled body's solid: the contacts' lines kept too
+    bool ready = false, bodyReady = false;
   };
   std::array<ShapeKernels, 8> kernels_;  ///< by layout::ShapeCode
   struct ShapeData {
@@ -683,9 +814,19 @@ class Solver {
   };
   std::vector<ShapeData> shapeData_;  ///< every grid and hull the solids use, uploaded once each
   Buffer<std::uint32_t> flags_;   ///< per settle pass: whether its vertex passes found a contact
+  bool coupled_ = false;          ///< some solid is a dynamic body this substep
+  std::vector<CoupledBody*> bodies_;          ///< the dynamic solids' bodies, this substep
+  std::vector<Eigen::Vector3d> bodyCentre_;  ///< their centres where the substep's contacts were found (world)
+  Buffer<layout::Vertex> vStart_, vPre_;      ///< velocities at the substep's start, before the contacts
+  Buffer<layout::Lines> lines_;
+  Buffer<layout::BodyPush> pushes_;
+  Buffer<layout::Body> bodyData_;
+  Buffer<layout::BodySum> bodySums_;
+  Buffer<float> shares_;
+  std::vector<Eigen::Vector3d> bodyForce_, bodyTorque_;  ///< what the cloth passed to each, last substep
   static constexpr int kSettlePasses = 4;  ///< extra vertex passes where solids meet (BasicSolver::kSettlePasses)
   Program predict_, solve_, update_, respond_, respondFriction_, propagate_, centre_, translate_, pinKernel_, settle_,
-      frictionKernel_;
+      frictionKernel_, contactForces_, bodySumKernel_, shareKernel_;
   std::vector<Pin> pins_;  ///< targets in world coordinates (uploaded each substep, in the local frame then)
   Buffer<layout::PinSlot> pinSlots_;
   Buffer<float> pinLambdas_;

@@ -1,0 +1,198 @@
+// DESIGN 6, phase 2, per vertex (the CPU twin: gatherContactForces with pinchSupport, unresolvedOverlap,
+// contactPoint, addWrench, addExchange and gatherPropagatedImpulse in include/drape/solver.hpp): what each contact
+// vertex passes to the coupled bodies it touches, by the chosen estimator (sub-force, energy-based, impulse-based),
+// reversed onto the body at the contact's line; each entry is written to the vertex's own BodyPush slots (one per
+// contact slot at most), so nothing is summed here and no atomics are needed. body_sums.comp then sums them per
+// body in a fixed order.
+//
+// A vertex whose slots all belong to one body passes that body its whole velocity change along the slot that
+// corrected it most (an exchange, which shareExchanges may scale); a vertex between two bodies, or a body and a
+// fixed solid, passes each body the normal part along its own slot (direct), unless it is pinched against a fixed
+// solid facing the body, which then holds the body through it (a pinch). With the impulse estimator and
+// propagation, a vertex not in contact passes what propagation gave it to the body of its first neighbour in
+// contact with one.
+layout(local_size_x = DRAPE_WORKGROUP) in;
+layout(std430, binding = DRAPE_B_POSITIONS) readonly buffer Positions { vec4 x[]; };
+layout(std430, binding = DRAPE_B_VELOCITIES) readonly buffer Velocities { vec4 v[]; };
+layout(std430, binding = DRAPE_B_START) readonly buffer Start { vec4 x0[]; };
+layout(std430, binding = DRAPE_B_V_START) readonly buffer VStart { vec4 vStart[]; };
+layout(std430, binding = DRAPE_B_V_PRE) readonly buffer VPre { vec4 vPre[]; };
+layout(std430, binding = DRAPE_B_CONTACTS) readonly buffer Contacts { Contact contacts[]; };
+layout(std430, binding = DRAPE_B_LINES) readonly buffer LinesBuffer { Lines lines[]; };
+layout(std430, binding = DRAPE_B_NEIGHBOUR_OFFSETS) readonly buffer NeighbourOffsets { uint neighbourOffsets[]; };
+layout(std430, binding = DRAPE_B_NEIGHBOURS) readonly buffer Neighbours { uint neighbours[]; };
+layout(std430, binding = DRAPE_B_BODIES) readonly buffer Bodies { Body bodies[]; };
+layout(std430, binding = DRAPE_B_PUSHES) writeonly buffer Pushes { BodyPush pushes[]; };
+layout(location = DRAPE_U_COUNT) uniform uint count;
+layout(location = DRAPE_U_STEP) uniform float h;
+layout(location = DRAPE_U_THICKNESS) uniform float thickness;
+layout(location = DRAPE_U_ESTIMATOR) uniform int estimator;  // 0 sub-force, 1 energy, 2 impulse
+layout(location = DRAPE_U_NORMAL_ONLY) uniform uint normalOnly;
+layout(location = DRAPE_U_PROPAGATED) uniform uint propagated;
+
+const int kDirect = 0, kExchange = 1, kPinch = 2;
+const float kPinchRate = 0.2;  // share of a pinch's overlap its support undoes per substep
+
+BodyPush entries[DRAPE_CONTACT_SLOTS];
+int entryCount = 0;
+
+vec3 crossOf(vec3 a, vec3 b) {
+  precise const vec3 c = vec3(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
+  return c;
+}
+
+// Where slot k of vertex `at` pushes its body, from the body's centre (contactPoint).
+vec3 contactPoint(uint at, int k, Body body) {
+  const vec3 n = contacts[at].normal[k].xyz;
+  precise const vec3 touch = (x[at].xyz - thickness * n) - body.centre.xyz;
+  const vec3 push = lines[at].push[k].xyz, moment = lines[at].moment[k].xyz;
+  precise const float along = dot3(push, n);
+  if (!(along > 0.5)) return touch;
+  precise const vec3 r = crossOf(n, moment / along) + dot3(touch, n) * n;
+  return r;
+}
+
+// A push f on slot k's body from vertex `at` (addWrench), as entry of the given kind; vertexSide for an exchange.
+void addEntry(uint at, int k, vec3 f, int kind, float vertexSide) {
+  const Contact c = contacts[at];
+  const int b = c.body[k];
+  const vec3 n = c.normal[k].xyz;
+  // Without friction a contact can only push along its normal.
+  if (normalOnly != 0u || (c.friction[k].x == 0.0 && c.friction[k].y == 0.0)) f = dot3(f, n) * n;
+  const vec3 r = contactPoint(at, k, bodies[b]);
+  entries[entryCount].force = vec4(f, vertexSide);
+  entries[entryCount].torque = vec4(crossOf(r, f), 0.0);
+  entries[entryCount].body = b;
+  entries[entryCount].kind = kind;
+  ++entryCount;
+}
+
+// The overlap the projections could not resolve for slot k of vertex i (unresolvedOverlap).
+float unresolvedOverlap(uint i, int k) {
+  const Contact c = contacts[i];
+  const vec3 xi = x[i].xyz, n = c.normal[k].xyz;
+  precise float overlap = max(c.velocity[k].w - dot3(n, xi), 0.0);
+  for (int j = 0; j < int(c.slots.x); ++j)
+    if (j != k)
+      overlap = overlap + max(c.velocity[j].w - dot3(c.normal[j].xyz, xi), 0.0) * max(-dot3(c.normal[j].xyz, n), 0.0);
+  return overlap;
+}
+
+// A vertex pinched between slot k's body and a fixed solid facing it: the solid holds the body through it
+// (pinchSupport). Returns false when the vertex is not pinched.
+bool pinchSupport(uint i, int k) {
+  const Contact c = contacts[i];
+  const vec3 n = c.normal[k].xyz;
+  int against = -1;
+  for (int j = 0; j < int(c.slots.x); ++j)
+    if (j != k && c.body[j] < 0 && dot3(c.normal[j].xyz, n) < -0.5) against = j;
+  if (against < 0) return false;
+  const Body body = bodies[c.body[k]];
+  const vec3 r = contactPoint(i, k, body);
+  const vec3 wall = c.velocity[against].xyz;
+  precise const vec3 bodyAt = body.linear.xyz + crossOf(body.angular.xyz, r);
+  precise const float approach = dot3(bodyAt - wall, n) + kPinchRate * unresolvedOverlap(i, k) / h;
+  const vec3 rn = crossOf(r, n);
+  const mat3 inverseInertia = transpose(mat3(body.inverseInertia[0].xyz, body.inverseInertia[1].xyz,
+                                             body.inverseInertia[2].xyz));
+  precise const float kn = body.centre.w + dot3(rn, inverseInertia * rn);
+  if (!(approach > 0.0) || !(kn > 0.0)) {
+    entries[entryCount].force = vec4(0.0);
+    entries[entryCount].torque = vec4(0.0);
+    entries[entryCount].body = c.body[k];
+    entries[entryCount].kind = kPinch;
+    ++entryCount;
+    return true;
+  }
+  precise const float push = approach / (kn * h);  // N, on the body along -n
+  precise vec3 force = -push * n;
+  precise vec3 slide = bodyAt - v[i].xyz;
+  slide = slide - dot3(slide, n) * n;
+  const float speed = length3(slide);
+  if (speed > 0.0 && normalOnly == 0u) {
+    slide = slide / speed;
+    const vec3 rt = crossOf(r, slide);
+    precise const float stop = speed / ((body.centre.w + dot3(rt, inverseInertia * rt)) * h);
+    const vec2 mu = c.friction[k].xy;
+    force = force - (stop <= mu.x * push ? stop : min(stop, mu.y * push)) * slide;
+  }
+  addEntry(i, k, force, kPinch, 0.0);
+  return true;
+}
+
+void main() {
+  const uint i = gl_GlobalInvocationID.x;
+  if (i >= count) return;
+  for (int e = 0; e < DRAPE_CONTACT_SLOTS; ++e) {
+    entries[e].force = vec4(0.0);
+    entries[e].torque = vec4(0.0);
+    entries[e].body = -1;
+    entries[e].kind = kDirect;
+  }
+  const Contact c = contacts[i];
+  const int slots = int(c.slots.x);
+  const float w = x[i].w;
+  if (slots == 0) {
+    // gatherPropagatedImpulse: the first neighbour in contact with a body takes what propagation gave i.
+    precise const vec3 dv = v[i].xyz - vPre[i].xyz;
+    if (propagated != 0u && w != 0.0 && dv != vec3(0.0)) {
+      bool done = false;
+      for (uint q = neighbourOffsets[i]; q < neighbourOffsets[i + 1u] && !done; ++q) {
+        const uint j = neighbours[q];
+        const Contact cj = contacts[j];
+        for (int k = 0; k < int(cj.slots.x) && !done; ++k) {
+          if (cj.body[k] < 0) continue;
+          precise const float m = 1.0 / w;
+          precise const vec3 f = -(m / h) * dv;
+          addEntry(j, k, f, kExchange, dot3(f, f) / m);
+          done = true;
+        }
+      }
+    }
+  } else {
+    bool oneBody = true;
+    int top = 0;  // the slot that corrected the vertex most
+    for (int k = 1; k < slots; ++k) {
+      oneBody = oneBody && c.body[k] == c.body[0];
+      if (c.normal[k].w > c.normal[top].w) top = k;
+    }
+    precise const float m = 1.0 / w;
+    const vec3 vi = v[i].xyz, pre = vPre[i].xyz, start = vStart[i].xyz;
+    precise const vec3 dv = vi - pre;                       // what the contacts did
+    precise const vec3 otherForce = m * (pre - start) / h;  // constraints and gravity this substep
+    precise vec3 energyForce = vec3(0.0);
+    if (estimator == 1) {
+      precise const vec3 d = x[i].xyz - x0[i].xyz;
+      precise const float d2 = dot3(d, d);
+      precise const float work = 0.5 * m * (dot3(vi, vi) - dot3(start, start)) - dot3(otherForce, d);
+      if (d2 > 1e-24) energyForce = (work / d2) * d;
+      precise const vec3 balance = m * (vi - start) / h - otherForce;
+      const float cap = length3(balance);
+      const float size = length3(energyForce);
+      if (size > cap) energyForce = energyForce * (cap / size);
+    }
+    for (int k = 0; k < slots; ++k) {
+      if (c.body[k] < 0) continue;
+      if (slots > 1 && !oneBody && pinchSupport(i, k)) continue;
+      if (oneBody && k != top) continue;
+      const vec3 n = c.normal[k].xyz;
+      precise vec3 onBody = vec3(0.0);
+      if (estimator == 0) {
+        precise const float fn = dot3(otherForce, n);
+        if (fn < 0.0) onBody = fn * n;
+      } else if (estimator == 1) {
+        onBody = oneBody ? -energyForce : -dot3(energyForce, n) * n;
+      } else {
+        precise const float dvn = dot3(dv, n);
+        precise vec3 impulse = (dvn + unresolvedOverlap(i, k) / h) * n;
+        if (oneBody) impulse = impulse + (dv - dvn * n);  // the tangential (friction) change
+        onBody = -(m / h) * impulse;
+      }
+      if (oneBody)
+        addEntry(i, k, onBody, kExchange, dot3(onBody, onBody) / m);
+      else
+        addEntry(i, k, onBody, kDirect, 0.0);
+    }
+  }
+  for (int e = 0; e < DRAPE_CONTACT_SLOTS; ++e) pushes[DRAPE_CONTACT_SLOTS * i + uint(e)] = entries[e];
+}

@@ -1,0 +1,202 @@
+// Two-way coupling on the GPU (issue 5, DESIGN 6): the contact-force estimates gathered per vertex
+// (contact_forces.comp), summed per body in a fixed order (body_sums.comp), shared with light bodies (share.comp)
+// and applied to the bodies, against the CPU solver on the coupling's invariants: the total momentum, the energy a
+// light body may not gain, the spin normal forces may not change, a resting box's weight.
+#include "gpu_helpers.hpp"
+
+#include <drape/drape.hpp>
+#include <drape/rigid/coupled.hpp>
+
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <memory>
+
+namespace {
+
+using drape::Index;
+
+std::shared_ptr<const drape::ClothAsset<float>> squareCloth(int n, double spacing, double z) {
+  drape::GridDesc grid;
+  grid.nx = grid.ny = n;
+  grid.spacing = spacing;
+  grid.placement.position = {0, 0, z};
+  return std::make_shared<const drape::ClothAsset<float>>(drape::ClothAsset<float>::grid(grid));
+}
+
+template <class Cloth> Eigen::Vector3d clothMomentum(const Cloth& cloth) {
+  Eigen::Vector3d p = Eigen::Vector3d::Zero();
+  const auto& state = cloth.state();
+  for (Index i = 0; i < cloth.vertexCount(); ++i)
+    if (state.invMass[std::size_t(i)] > 0)
+      p += state.v[std::size_t(i)].template cast<double>() / double(state.invMass[std::size_t(i)]);
+  return p;
+}
+
+drape::RigidSettings emptySpace() {
+  drape::RigidSettings rigid;
+  rigid.gravity.setZero();
+  rigid.ground = false;
+  return rigid;
+}
+
+/// A ball (density 100, radius 6 cm) shot at 2 m/s into a free 21 x 21 cloth in empty space, off centre, for
+/// 0.4 s: the ball's final velocity and the total momentum before and after.
+struct Shot {
+  Eigen::Vector3d ballVelocity, before, after, clothGot;
+};
+template <class Cloth> Shot shoot(Cloth& cloth) {
+  drape::RigidWorld world(emptySpace());
+  drape::BodyDesc ball;
+  ball.shape = drape::Sphere{0.06};
+  ball.pose.position = {0.01, 0.005, -0.15};
+  ball.linearVelocity = {0, 0, 2};
+  ball.density = 100;
+  const int b = world.add(ball);
+  drape::addCoupledBody(cloth, world, b);
+  Shot s;
+  s.before = world.linearMomentum() + clothMomentum(cloth);
+  for (int k = 0; k < 40; ++k) drape::stepCoupled(cloth, world, 0.01);
+  s.clothGot = clothMomentum(cloth);
+  s.after = world.linearMomentum() + s.clothGot;
+  s.ballVelocity = world.body(b).linearVelocity();
+  return s;
+}
+
+}  // namespace
+
+TEST_CASE("coupling on the GPU: a ball hitting a free cloth keeps the total momentum, as on the CPU", "[gpu]") {
+  // The CPU test's tolerances (tests/test_coupling.cpp): the estimators are not exact in momentum, the impulse
+  // one nearly so.
+  struct Case {
+    drape::ContactForce estimator;
+    double tolerance;
+  };
+  const Case c = GENERATE(Case{drape::ContactForce::Impulse, 0.015}, Case{drape::ContactForce::Energy, 0.05},
+                          Case{drape::ContactForce::SubForce, 0.06});
+  const drape::CollisionMethod method = GENERATE(drape::CollisionMethod::Vertex, drape::CollisionMethod::Improved);
+  drape::Settings settings;
+  settings.gravity.setZero();
+  settings.contactForce = c.estimator;
+  settings.collisionMethod = method;
+  drape::Solver<float> cpuCloth(squareCloth(21, 0.02, 0.0), settings);
+  drape::gpu::Solver gpuCloth(drape::test::gpuContext(), squareCloth(21, 0.02, 0.0), settings);
+  const Shot cpu = shoot(cpuCloth), gpu = shoot(gpuCloth);
+  INFO(drape::toString(c.estimator) << ", " << drape::toString(method) << ": GPU momentum " << gpu.before.transpose()
+                                    << " -> " << gpu.after.transpose() << ", the cloth got " << gpu.clothGot.norm()
+                                    << "; ball velocity GPU " << gpu.ballVelocity.transpose() << ", CPU "
+                                    << cpu.ballVelocity.transpose());
+  CHECK(gpu.clothGot.norm() >= 0.05 * gpu.before.norm());  // the ball did push the cloth
+  CHECK((gpu.after - gpu.before).norm() <= c.tolerance * gpu.before.norm());
+  if (method == drape::CollisionMethod::Vertex) {
+    // Vertex contacts only: the GPU does the CPU's passes in its order, so the ball leaves with the CPU's
+    // velocity to rounding (measured within 4e-5 m/s).
+    CHECK((gpu.ballVelocity - cpu.ballVelocity).norm() <= 1e-4);
+  } else {
+    // The face pass goes colour by colour on the GPU, in index order on the CPU: another order of the same
+    // Gauss-Seidel pass, which on this off-centre hit moves the ball's sideways velocity by up to 0.02 m/s
+    // (of 2). The speed it leaves with along the shot stays within 1 % (measured 0.7 %).
+    CHECK(std::abs(gpu.ballVelocity.z() - cpu.ballVelocity.z()) <= 0.02);
+  }
+}
+
+TEST_CASE("coupling on the GPU: a light ball hitting a cloth at rest gains no energy (the exchange is shared)",
+          "[gpu]") {
+  // A 0.11 g ball at 2 m/s into a free cloth: the vertices it meets outweigh it, so each body's exchange is shared
+  // as an inelastic collision (share.comp). The impulse estimate: the total kinetic energy never exceeds its start.
+  drape::Settings settings;
+  settings.gravity.setZero();
+  drape::gpu::Solver cloth(drape::test::gpuContext(), squareCloth(21, 0.02, 0.0), settings);
+  drape::RigidWorld world(emptySpace());
+  drape::BodyDesc ball;
+  ball.shape = drape::Sphere{0.03};
+  ball.pose.position = {0.004, -0.003, -0.05};
+  ball.linearVelocity = {0, 0, 2};
+  ball.density = 1;
+  const int b = world.add(ball);
+  drape::addCoupledBody(cloth, world, b);
+  auto energy = [&] {
+    double e = world.kineticEnergy();
+    const auto& state = cloth.state();
+    for (Index i = 0; i < cloth.vertexCount(); ++i)
+      if (state.invMass[std::size_t(i)] > 0)
+        e += 0.5 * double(state.v[std::size_t(i)].squaredNorm()) / double(state.invMass[std::size_t(i)]);
+    return e;
+  };
+  const double e0 = energy();
+  const Eigen::Vector3d p0 = world.linearMomentum() + clothMomentum(cloth);
+  double highest = e0;
+  for (int s = 0; s < 20; ++s)
+    drape::stepCoupled(cloth, world, 0.01, [&](const drape::gpu::Solver&) { highest = std::max(highest, energy()); });
+  const Eigen::Vector3d p = world.linearMomentum() + clothMomentum(cloth);
+  INFO("kinetic energy " << e0 << " J at the start, at most " << highest << " J; momentum " << p0.transpose()
+                         << " -> " << p.transpose());
+  CHECK(clothMomentum(cloth).norm() >= 0.5 * p0.norm());
+  CHECK(highest <= e0 * (1 + 1e-6));
+  CHECK((p - p0).norm() <= 0.015 * p0.norm());
+}
+
+TEST_CASE("coupling on the GPU: normal forces pass through a ball's centre, so a bouncing ball keeps its spin",
+          "[gpu]") {
+  // The contacts' lines (lines kept per slot by the body's collision kernels, contactPoint in
+  // contact_forces.comp): on a ball every line passes through the centre the field had.
+  const drape::ContactForce estimator =
+      GENERATE(drape::ContactForce::Impulse, drape::ContactForce::Energy, drape::ContactForce::SubForce);
+  drape::Settings settings;
+  settings.gravity.setZero();
+  settings.contactForce = estimator;
+  settings.normalForceOnly = true;
+  drape::gpu::Solver cloth(drape::test::gpuContext(), squareCloth(21, 0.02, 0.0), settings);
+  for (Index corner : {0, 20, 420, 440}) cloth.pin(corner);
+  drape::RigidWorld world(emptySpace());
+  drape::BodyDesc ball;
+  ball.shape = drape::Sphere{0.05};
+  ball.pose.position = {0.03, -0.02, 0.08};
+  ball.linearVelocity = {-0.4, 0.3, -1.5};
+  ball.angularVelocity = {3, -2, 5};
+  ball.density = 200;
+  const int b = world.add(ball);
+  drape::addCoupledBody(cloth, world, b);
+  for (int s = 0; s < 30; ++s) drape::stepCoupled(cloth, world, 0.01);
+  const Eigen::Vector3d dv = world.body(b).linearVelocity() - ball.linearVelocity;
+  const Eigen::Vector3d dw = world.body(b).angularVelocity() - ball.angularVelocity;
+  INFO(drape::toString(estimator) << ": velocity change " << dv.transpose() << " m/s, spin change " << dw.transpose()
+                                  << " rad/s");
+  CHECK(dv.z() > 0.5);  // the cloth stopped the fall or threw the ball back
+  CHECK(dw.norm() <= 1e-5 * ball.angularVelocity.norm());  // the CPU's float bound
+}
+
+TEST_CASE("coupling on the GPU: a box resting on a cloth on the ground gets its weight back", "[gpu]") {
+  // The vertices under the box are pinched between it and the floor: the floor holds the box through them
+  // (pinchSupport in contact_forces.comp). The CPU test's bounds.
+  drape::Settings settings;
+  drape::gpu::Solver cloth(drape::test::gpuContext(), squareCloth(21, 0.02, settings.thickness), settings);
+  cloth.addSolid(drape::Solid<drape::Plane>{});
+  drape::RigidWorld world;
+  drape::BodyDesc box;
+  box.shape = drape::Box{{0.08, 0.08, 0.04}};
+  box.pose.position = {0.005, -0.003, 2 * settings.thickness + 0.04 + 0.002};
+  box.density = 100;
+  const int b = world.add(box);
+  drape::addCoupledBody(cloth, world, b);
+  const double weight = 9.81 / world.body(b).inverseMass();
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  int samples = 0;
+  double lowest = 1e9, fastest = 0;
+  for (int s = 0; s < 150; ++s) {
+    drape::stepCoupled(cloth, world, 0.01, [&](const drape::gpu::Solver& c) {
+      if (s < 50) return;
+      sum += c.bodyForces()[0];
+      ++samples;
+    });
+    lowest = std::min(lowest, world.body(b).pose().position.z() - 0.04);
+    if (s >= 50) fastest = std::max(fastest, world.body(b).linearVelocity().norm());
+  }
+  const Eigen::Vector3d mean = sum / samples;
+  INFO("mean force from the cloth " << mean.transpose() << " N against a weight of " << weight << " N; lowest bottom "
+                                    << lowest << " m, fastest " << fastest << " m/s");
+  CHECK(std::abs(mean.z() - weight) <= 0.05 * weight);
+  CHECK(mean.head<2>().norm() <= 0.05 * weight);
+  CHECK(lowest > settings.thickness);
+  CHECK(fastest < 0.05);
+}
