@@ -158,10 +158,13 @@ inline RigidShape makeRainShape(RainShape kind, double d, std::mt19937& rng) {
 /// The scene. Not copyable or movable: the cloth's dynamic solids point at the world's bodies.
 template <Scalar S, class ClothSolver = Solver<S>> class RigidRain {
  public:
-  explicit RigidRain(const RainConfig& c)
+  /// The scene on a cloth solver made from `prefix...` (e.g. the GPU solver's context), then the asset, settings
+  /// and area density.
+  template <class... Prefix>
+  explicit RigidRain(const RainConfig& c, Prefix&... prefix)
       : config_((c.validate(), c)),
         world_(c.rigid),
-        cloth_(makeAsset(c), clothSettings(c), c.areaDensity) {
+        cloth_(prefix..., makeAsset(c), clothSettings(c), c.areaDensity) {
     // The corners, pinned until the release; their inverse masses are kept to give back.
     const Index nx = c.nx, ny = c.ny;
     corners_ = {0, nx - 1, (ny - 1) * nx, ny * nx - 1};

@@ -22,6 +22,8 @@ layout(location = DRAPE_U_SOLID_LINEAR) uniform vec3 linearVelocity;
 layout(location = DRAPE_U_SOLID_ANGULAR) uniform vec3 angularVelocity;
 layout(location = DRAPE_U_PGD_ITERATIONS) uniform int maxIterations;
 layout(location = DRAPE_U_FRICTION) uniform vec2 friction;  // static, dynamic
+layout(location = DRAPE_U_BOX_LOW) uniform vec3 boxLow;
+layout(location = DRAPE_U_BOX_HIGH) uniform vec3 boxHigh;
 #if DRAPE_BODY
 layout(std430, binding = DRAPE_B_LINES) buffer LinesBuffer { Lines lines[]; };
 layout(location = DRAPE_U_BODY) uniform int body;  // the coupled body this solid pushes
@@ -76,6 +78,10 @@ void main() {
   const uvec4 t = faces[first + gl_GlobalInvocationID.x];
   const vec4 a = x[t.x], b = x[t.y], c = x[t.z];
   const vec3 x0 = a.xyz, x1 = b.xyz, x2 = c.xyz;
+  // A face whose box misses the solid's box grown by the thickness has no point within the thickness of it
+  // (projectFaceContactsAs with kBoxed): culled before any field evaluation.
+  precise const vec3 low = boxLow - vec3(thickness), high = boxHigh + vec3(thickness);
+  if (!(all(greaterThanEqual(max(max(x0, x1), x2), low)) && all(lessThanEqual(min(min(x0, x1), x2), high)))) return;
   // Bounding sphere and cull (faceSphere, queryFace).
   precise const vec3 middle = ((x0 + x1) + x2) / 3.0;
   precise const float r2 = max(max(dot3(x0 - middle, x0 - middle), dot3(x1 - middle, x1 - middle)),

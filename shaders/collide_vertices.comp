@@ -25,6 +25,8 @@ const int body = -1;
 layout(location = DRAPE_U_SLACK) uniform float slack;
 layout(location = DRAPE_U_PASS) uniform int pass;
 layout(location = DRAPE_U_FRESH) uniform uint fresh;
+layout(location = DRAPE_U_BOX_LOW) uniform vec3 boxLow;
+layout(location = DRAPE_U_BOX_HIGH) uniform vec3 boxHigh;
 
 void main() {
   const uint i = gl_GlobalInvocationID.x;
@@ -32,7 +34,11 @@ void main() {
   if (pass > 0 && flags[pass - 1] == 0u) return;
   const vec4 xi = x[i];
   bool found = false;
-  if (xi.w != 0.0) {
+  // Outside the solid's box grown by the thickness, phi is beyond the thickness: no field evaluation (what the
+  // CPU's broad phase leaves out).
+  precise const vec3 low = boxLow - vec3(thickness), high = boxHigh + vec3(thickness);
+  const bool near = all(greaterThanEqual(xi.xyz, low)) && all(lessThanEqual(xi.xyz, high));
+  if (xi.w != 0.0 && near) {
     vec3 n;
     const float phi = sdf(xi.xyz, n);
     precise const float limit = thickness - slack;

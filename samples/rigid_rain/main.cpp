@@ -1,8 +1,16 @@
 // The rigid-body rain sample (the thesis's Fig 6.6, issue 4 item 6): random rigid bodies fall onto a cloth
 // pinned at its corners, coupled two ways; the corners are let go after --release seconds and everything falls
 // to the floor. Prints a summary to stderr; --json prints one JSON object on stdout and nothing else there.
+// --gpu runs the cloth on the GPU solver (float), and --png DIR draws frames offscreen (cloth, bodies, floor) with
+// the same kind of context and writes them as PNGs (both built where drape::gpu is, DRAPE_SAMPLE_GPU).
 
 #include "rigid_rain.hpp"
+
+#if DRAPE_SAMPLE_GPU
+#include <drape/gpu/render.hpp>
+#include <drape/gpu/solver.hpp>
+#include <stb/stb_image_write.h>
+#endif
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
@@ -14,7 +22,10 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iostream>
+#include <memory>
+#include <type_traits>
 #include <numbers>
 #include <numeric>
 #include <vector>
@@ -83,8 +94,8 @@ TriangleMesh bodyMesh(const drape::RigidShape& shape) {
   return std::visit(visitor, shape);
 }
 
-template <drape::Scalar S>
-void writeFrame(const std::string& path, const drape::scenes::RigidRain<S>& scene, const std::vector<TriangleMesh>& meshes) {
+template <class Scene>
+void writeFrame(const std::string& path, const Scene& scene, const std::vector<TriangleMesh>& meshes) {
   std::ofstream out(path);
   if (!out) throw drape::Error("cannot write " + path);
   char line[128];
@@ -122,11 +133,57 @@ struct Options {
   int steps = 300;
   std::string objDir;
   std::string traceFile;
+  std::string pngDir;
+  int pngEvery = 10;
 };
 
-template <drape::Scalar S> nlohmann::ordered_json run(const Options& o) {
+#if DRAPE_SAMPLE_GPU
+using Painter = drape::gpu::Renderer;
+
+/// A picture of the scene: the floor (checkered), the cloth (from the GPU solver's buffer, or its positions) and
+/// every body posed, seen from above one side of the cloth; written as path (PNG).
+template <class Scene>
+void drawFrame(Painter& painter, const Scene& scene, const std::vector<TriangleMesh>& meshes, const std::string& path) {
+  const auto& cloth = scene.cloth();
+  const auto& c = scene.config();
+  const double halfX = 0.5 * (c.nx - 1) * c.spacing, halfY = 0.5 * (c.ny - 1) * c.spacing;
+  drape::gpu::Camera cam;
+  cam.target = {0, 0, 0.25 * c.clothHeight};
+  cam.eye = {1.2 * halfX + 0.4, -1.6 * halfY - 0.3, c.clothHeight + 0.8};
+  painter.begin(cam);
+  drape::gpu::DrawMesh floor;
+  for (double a : {-3.0, 3.0})
+    for (double b : {-3.0, 3.0}) floor.positions.push_back({a * halfX, b * halfY, 0});
+  floor.triangles = {{0, 2, 3}, {0, 3, 1}};
+  painter.draw(floor, Eigen::Vector3f(0.75f, 0.75f, 0.72f), true);
+  const Eigen::Vector3f clothColour(0.85f, 0.35f, 0.15f);
+  if constexpr (std::is_same_v<std::decay_t<decltype(cloth)>, drape::gpu::Solver>) {
+    painter.drawTriangles(cloth.positionBuffer(), cloth.origin(), cloth.faceBuffer(), clothColour);
+  } else {
+    drape::gpu::DrawMesh m;
+    m.triangles = cloth.asset().triangles;
+    for (Index i = 0; i < cloth.vertexCount(); ++i) m.positions.push_back(cloth.position(i));
+    painter.draw(m, clothColour);
+  }
+  for (int b = 0; b < scene.world().bodyCount(); ++b) {
+    const drape::Pose pose = scene.world().body(b).pose();
+    drape::gpu::DrawMesh m;
+    m.triangles = meshes[std::size_t(b)].triangles;
+    for (const auto& v : meshes[std::size_t(b)].vertices) m.positions.push_back(pose.apply(v));
+    painter.draw(m, Eigen::Vector3f(0.3f, 0.45f, 0.75f));
+  }
+  const auto rgba = painter.pixels();
+  if (!stbi_write_png(path.c_str(), painter.width(), painter.height(), 4, rgba.data(), painter.width() * 4))
+    throw drape::Error("cannot write " + path);
+}
+#else
+struct Painter {};
+#endif
+
+template <drape::Scalar S, class Cloth = drape::Solver<S>, class... Prefix>
+nlohmann::ordered_json run(const Options& o, [[maybe_unused]] Painter* painter, Prefix&... prefix) {
   using Clock = std::chrono::steady_clock;
-  drape::scenes::RigidRain<S> scene(o.config);
+  drape::scenes::RigidRain<S, Cloth> scene(o.config, prefix...);
   auto& cloth = scene.cloth();
   auto& world = scene.world();
   const Index n = cloth.vertexCount();
@@ -145,7 +202,7 @@ template <drape::Scalar S> nlohmann::ordered_json run(const Options& o) {
     const double energy = 0.5 * m * body.state.linearVelocity.squaredNorm() +
                           0.5 * w.dot(body.massProperties().inertia * w) + m * g * body.state.pose.position.z();
     speedBound = std::max(speedBound, std::sqrt(2 * energy / m));
-    if (!o.objDir.empty()) meshes.push_back(bodyMesh(body.shape()));
+    if (!o.objDir.empty() || painter) meshes.push_back(bodyMesh(body.shape()));
   }
   double clothMass = 0;
   for (Index i = 0; i < n; ++i) {
@@ -235,6 +292,13 @@ template <drape::Scalar S> nlohmann::ordered_json run(const Options& o) {
             << '\n';
     }
     if (!o.objDir.empty()) writeFrame(frameName(s), scene, meshes);
+#if DRAPE_SAMPLE_GPU
+    if (painter && s % o.pngEvery == 0) {
+      char name[32];
+      std::snprintf(name, sizeof name, "/frame_%04d.png", s);
+      drawFrame(*painter, scene, meshes, o.pngDir + name);
+    }
+#endif
     if (!finite) break;
   }
 
@@ -340,6 +404,14 @@ int main(int argc, char** argv) {
   app.add_option("--trace", o.traceFile, "CSV per step: time, timing, penetration, speeds, strain, heights");
   app.add_option("--obj", o.objDir, "directory for one OBJ file per frame (cloth and bodies)");
   app.add_flag("--json", json, "print one JSON object on stdout");
+  bool gpu = false;
+  std::string backend = "auto";
+  app.add_flag("--gpu", gpu, "run the cloth on the GPU (float)");
+  app.add_option("--backend", backend, "GPU context: auto (EGL hardware device, else OSMesa), egl or osmesa")
+      ->check(CLI::IsMember({"auto", "egl", "osmesa"}))
+      ->capture_default_str();
+  app.add_option("--png", o.pngDir, "directory for pictures of the scene (drawn offscreen with a GL context)");
+  app.add_option("--png-every", o.pngEvery, "steps between pictures")->check(CLI::Range(1, 1000000))->capture_default_str();
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -350,7 +422,31 @@ int main(int argc, char** argv) {
     c.shapes = 0;
     for (const auto& s : shapes) c.shapes |= unsigned(drape::scenes::rainShapeFromString(s));
     if (!o.objDir.empty()) std::filesystem::create_directories(o.objDir);
-    const auto j = scalar == "double" ? run<double>(o) : run<float>(o);
+    nlohmann::ordered_json j;
+    if (gpu || !o.pngDir.empty()) {
+#if DRAPE_SAMPLE_GPU
+      drape::gpu::Context context(drape::gpu::backendFromString(backend));
+      std::unique_ptr<Painter> painter;
+      if (!o.pngDir.empty()) {
+        std::filesystem::create_directories(o.pngDir);
+        painter = std::make_unique<Painter>(context, 960, 540);
+      }
+      if (gpu) {
+        if (scalar != "float") throw drape::Error("--gpu runs float only");
+        j = run<float, drape::gpu::Solver>(o, painter.get(), context);
+        j["device"] = std::string("gpu/") + drape::gpu::toString(context.backend());
+      } else {
+        j = scalar == "double" ? run<double>(o, painter.get()) : run<float>(o, painter.get());
+        j["device"] = "cpu";
+      }
+      j["renderer"] = context.renderer();
+#else
+      throw drape::Error("this build has no GPU part (it needs glad, Debian python3-glad, libegl-dev and libstb-dev)");
+#endif
+    } else {
+      j = scalar == "double" ? run<double>(o, nullptr) : run<float>(o, nullptr);
+      j["device"] = "cpu";
+    }
     if (json) std::cout << j.dump() << '\n';
     std::fprintf(stderr,
                  "rigid rain: %d bodies (seed %u, %s, %s), %d steps of %g s x %d substeps, release at %g s\n"

@@ -106,6 +106,9 @@ template <class Shape, class Place> void compareFacePass(Place&& place) {
   k.set(layout::kSolidAngular, 0.0f, 0.0f, 0.0f);
   glProgramUniform1i(k.id(), layout::kPgdIterations, iterations);
   glProgramUniform2f(k.id(), layout::kFriction, solid.motion.staticFriction, solid.motion.dynamicFriction);
+  REQUIRE(solid.bounded);  // faces whose boxes miss the solid's are culled first, as the CPU's broad phase does
+  k.set(layout::kBoxLow, solid.boxLow.x(), solid.boxLow.y(), solid.boxLow.z());
+  k.set(layout::kBoxHigh, solid.boxHigh.x(), solid.boxHigh.y(), solid.boxHigh.z());
   for (std::size_t c = 0; c + 1 < coloured.offsets.size(); ++c) {
     k.set(layout::kFirst, unsigned(coloured.offsets[c]));
     k.set(layout::kCount, unsigned(coloured.offsets[c + 1] - coloured.offsets[c]));

@@ -73,6 +73,8 @@ enum Uniform : int {
   kNormalOnly = 25,     ///< uint: 1 to pass bodies only the normal part of each push
   kPropagated = 26,     ///< uint: 1 to pass on the impulse propagation gave vertices not in contact
   kBodyCount = 27,      ///< uint: how many coupled bodies
+  kBoxLow = 28,         ///< vec3: the solid's bounding box (the cloth's local frame), outside which phi is at least
+  kBoxHigh = 29,        ///<   the distance to the box (placeBounds); +-FLT_MAX for an unbounded solid
   kShape = 32,  ///< vec4[5] (locations 32-36): the solid's field, packed by packShape (gpu/shapes.hpp)
 };
 
@@ -235,6 +237,8 @@ inline std::string preamble(const std::string& defines = {}) {
   s += define("DRAPE_U_NORMAL_ONLY", kNormalOnly);
   s += define("DRAPE_U_PROPAGATED", kPropagated);
   s += define("DRAPE_U_BODY_COUNT", kBodyCount);
+  s += define("DRAPE_U_BOX_LOW", kBoxLow);
+  s += define("DRAPE_U_BOX_HIGH", kBoxHigh);
   // A kernel compiled without a choice gets the plane and friction (so every kernel compiles on its own).
   s += "#ifndef DRAPE_SHAPE\n#define DRAPE_SHAPE DRAPE_SHAPE_PLANE\n#endif\n";
   s += "#ifndef DRAPE_FRICTION\n#define DRAPE_FRICTION 1\n#endif\n";

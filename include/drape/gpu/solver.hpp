@@ -34,6 +34,7 @@
 
 #include <algorithm>
 #include <array>
+#include <limits>
 #include <memory>
 #include <string>
 #include <tuple>
@@ -325,6 +326,7 @@ class Solver {
     float repulsionRadius;
     Falloff falloff;
     const Buffer<layout::Vertex>* data;  ///< a mesh's grid nodes or a hull's faces and edges, else null
+    Vec3<float> boxLow, boxHigh;         ///< where phi may be below the distance to the box (+-FLT_MAX: anywhere)
   };
   void checkVertex(Index i) const {
     drape::detail::require(i >= 0 && i < vertexCount(), "vertex index " + std::to_string(i) + " out of range [0, " +
@@ -436,7 +438,10 @@ class Solver {
                   drape::detail::recompileSolid<Shape, float>(out[k], held, state_.origin);
                   const CompiledSolid<Shape, float>& compiled = out[k];
                   SolidPass p{shapeCode<Shape>(), packShape(compiled.sdf), compiled.motion, !Sdf<Shape, float>::kLinear,
-                              compiled.repulsionRadius, compiled.falloff, shapeData(shapeDataKey(compiled))};
+                              compiled.repulsionRadius, compiled.falloff, shapeData(shapeDataKey(compiled)),
+                              Vec3<float>::Constant(-std::numeric_limits<float>::max()),
+                              Vec3<float>::Constant(std::numeric_limits<float>::max())};
+                  if (compiled.bounded) p.boxLow = compiled.boxLow, p.boxHigh = compiled.boxHigh;
                   if (held.motion == Motion::Dynamic) {
                     p.motion.body = std::int32_t(bodies_.size());
                     bodies_.push_back(held.body);
@@ -473,6 +478,8 @@ class Solver {
     glProgramUniform2f(k.id(), layout::kFriction, m.staticFriction, m.dynamicFriction);
     if (p.data) p.data->bind(layout::kShapeData);
     if (m.body >= 0) glProgramUniform1i(k.id(), layout::kBody, m.body);
+    k.set(layout::kBoxLow, p.boxLow.x(), p.boxLow.y(), p.boxLow.z());
+    k.set(layout::kBoxHigh, p.boxHigh.x(), p.boxHigh.y(), p.boxHigh.z());
   }
 
   /// One solid's vertex pass (projectVertexContacts): `fresh` for the substep's first, which starts every
