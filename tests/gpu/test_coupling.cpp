@@ -47,7 +47,7 @@ drape::RigidSettings emptySpace() {
 struct Shot {
   Eigen::Vector3d ballVelocity, before, after, clothGot;
 };
-template <class Cloth> Shot shoot(Cloth& cloth) {
+template <class Cloth> Shot shoot(Cloth& cloth, double repulsion) {
   drape::RigidWorld world(emptySpace());
   drape::BodyDesc ball;
   ball.shape = drape::Sphere{0.06};
@@ -55,7 +55,9 @@ template <class Cloth> Shot shoot(Cloth& cloth) {
   ball.linearVelocity = {0, 0, 2};
   ball.density = 100;
   const int b = world.add(ball);
-  drape::addCoupledBody(cloth, world, b);
+  drape::CouplingDesc coupling;
+  coupling.repulsion.radius = repulsion;
+  drape::addCoupledBody(cloth, world, b, coupling);
   Shot s;
   s.before = world.linearMomentum() + clothMomentum(cloth);
   for (int k = 0; k < 40; ++k) drape::stepCoupled(cloth, world, 0.01);
@@ -77,14 +79,15 @@ TEST_CASE("coupling on the GPU: a ball hitting a free cloth keeps the total mome
   const Case c = GENERATE(Case{drape::ContactForce::Impulse, 0.015}, Case{drape::ContactForce::Energy, 0.05},
                           Case{drape::ContactForce::SubForce, 0.06});
   const drape::CollisionMethod method = GENERATE(drape::CollisionMethod::Vertex, drape::CollisionMethod::Improved);
+  const double repulsion = GENERATE(0.0, 0.03);  // m: with the region, it pushes the ball back too (gatherRepulsionForces)
   drape::Settings settings;
   settings.gravity.setZero();
   settings.contactForce = c.estimator;
   settings.collisionMethod = method;
   drape::Solver<float> cpuCloth(squareCloth(21, 0.02, 0.0), settings);
   drape::gpu::Solver gpuCloth(drape::test::gpuContext(), squareCloth(21, 0.02, 0.0), settings);
-  const Shot cpu = shoot(cpuCloth), gpu = shoot(gpuCloth);
-  INFO(drape::toString(c.estimator) << ", " << drape::toString(method) << ": GPU momentum " << gpu.before.transpose()
+  const Shot cpu = shoot(cpuCloth, repulsion), gpu = shoot(gpuCloth, repulsion);
+  INFO(drape::toString(c.estimator) << ", " << drape::toString(method) << ", repulsion " << repulsion << ": GPU momentum " << gpu.before.transpose()
                                     << " -> " << gpu.after.transpose() << ", the cloth got " << gpu.clothGot.norm()
                                     << "; ball velocity GPU " << gpu.ballVelocity.transpose() << ", CPU "
                                     << cpu.ballVelocity.transpose());

@@ -5,8 +5,6 @@
 
 #include <drape/drape.hpp>
 
-#include <drape/rigid/coupled.hpp>
-
 #include <catch2/catch.hpp>
 
 #include <cstring>
@@ -259,21 +257,19 @@ TEST_CASE("sliding down the slope, the GPU solver's cloth has the CPU's tremblin
   CHECK(b.maxStrain <= a.maxStrain + 1e-3);
 }
 
-TEST_CASE("the GPU solver names what it does not run yet, and rejects bad settings before changing anything", "[gpu]") {
+TEST_CASE("the GPU solver rejects bad settings and solids before changing anything", "[gpu]") {
   const auto parts = drape::scenes::slopeParts<float>(drape::scenes::SlopeConfig{});
-  drape::Settings bad = parts.settings;
-  bad.iterationCount = 0;
-  CHECK_THROWS_WITH(drape::gpu::Solver(drape::test::gpuContext(), parts.asset, bad), Catch::Contains("iterationCount"));
+  drape::Settings badSettings = parts.settings;
+  badSettings.iterationCount = 0;
+  CHECK_THROWS_WITH(drape::gpu::Solver(drape::test::gpuContext(), parts.asset, badSettings),
+                    Catch::Contains("iterationCount"));
   drape::gpu::Solver gpu(drape::test::gpuContext(), parts.asset, parts.settings);
   gpu.addSolid(parts.slope);
-  drape::RigidWorld world;
-  drape::BodyDesc ball;
-  ball.shape = drape::Sphere{0.1};
-  const int b = world.add(ball);
-  drape::CouplingDesc repelled;
-  repelled.repulsion.radius = 0.02;
-  CHECK_THROWS_WITH(drape::addCoupledBody(gpu, world, b, repelled), Catch::Contains("repulsion"));
-  CHECK_THROWS_WITH(gpu.setSettings(bad), Catch::Contains("iterationCount"));
+  drape::Solid<drape::Sphere> badBall;
+  badBall.shape.radius = -1;
+  CHECK_THROWS_WITH(gpu.addSolid(badBall), Catch::Contains("radius"));
+  CHECK_THROWS_WITH(gpu.solid<drape::Sphere>(0), Catch::Contains("out of range"));  // nothing was added
+  CHECK_THROWS_WITH(gpu.setSettings(badSettings), Catch::Contains("iterationCount"));
   CHECK(gpu.settings().iterationCount == parts.settings.iterationCount);
 }
 

@@ -346,6 +346,7 @@ class Solver {
     if (body && !k.bodyReady) {  // a coupled body's twins, which keep where each push acts
       const std::string bodyDefine = define + "#define DRAPE_BODY 1\n";
       k.verticesBody = Program("collide_vertices", shaders::collide_vertices, bodyDefine);
+      k.repelBody = Program("repel", shaders::repel, bodyDefine);
       if constexpr (!Sdf<Shape, float>::kLinear)
         k.facesBody = Program("collide_faces", shaders::collide_faces, bodyDefine);
       k.bodyReady = true;
@@ -390,10 +391,7 @@ class Solver {
 
   /// Settings the GPU runs (the rest are rejected by name).
   static void check(const Settings& s) { s.validate(); }
-  template <class Shape> static void checkSupported(const Solid<Shape>& s) {
-    drape::detail::require(s.motion != Motion::Dynamic || !(s.repulsion.radius > 0),
-                           "a coupled (dynamic) solid's repulsion region is CPU-only for now");
-  }
+  template <class Shape> static void checkSupported(const Solid<Shape>&) {}
 
   /// p to the nearest multiple of 1/64 m in each coordinate: a shift by it is exact in float.
   static Eigen::Vector3d snapOrigin(const Eigen::Vector3d& p) { return (p * 64.0).array().round().matrix() / 64.0; }
@@ -458,6 +456,13 @@ class Solver {
         solids_);
     reconcile_ = reconcile_ || passes_.size() > 1;
     coupled_ = !bodies_.empty();
+    bodyForce_.assign(bodies_.size(), Eigen::Vector3d::Zero());
+    bodyTorque_.assign(bodies_.size(), Eigen::Vector3d::Zero());
+    if (coupled_ && bodySums_.size() != bodies_.size()) {
+      bodyData_.assign(std::vector<layout::Body>(bodies_.size()));
+      bodySums_.assign(std::vector<layout::BodySum>(bodies_.size()));
+      shares_.assign(std::vector<float>(bodies_.size(), 1.0f));
+    }
     if (coupled_ && vStart_.size() != state_.x.size()) {  // the coupling's buffers, once a scene has a body
       const std::vector<layout::Vertex> zero(state_.x.size(), layout::Vertex{0, 0, 0, 0});
       vStart_.assign(zero);
@@ -529,8 +534,6 @@ class Solver {
   void gatherContactForces(float h) {
     const auto n = unsigned(vertexCount());
     const std::size_t nb = bodies_.size();
-    bodyForce_.assign(nb, Eigen::Vector3d::Zero());
-    bodyTorque_.assign(nb, Eigen::Vector3d::Zero());
     std::vector<layout::Body> data(nb);
     for (std::size_t b = 0; b < nb; ++b) {
       const CoupledBody& body = *bodies_[b];
@@ -543,16 +546,8 @@ class Solver {
       for (int r = 0; r < 3; ++r)
         for (int k = 0; k < 3; ++k) d.inverseInertia[r][k] = inertia(r, k);
     }
-    if (bodyData_.size() != nb) {
-      bodyData_.assign(data);
-      bodySums_.assign(std::vector<layout::BodySum>(nb));
-      shares_.assign(std::vector<float>(nb, 1.0f));
-    } else {
-      bodyData_.write(data);
-    }
+    bodyData_.write(data);
     bodyData_.bind(layout::kBodies);
-    bodySums_.bind(layout::kBodySums);
-    shares_.bind(layout::kShares);
     const ContactForce estimator = settings_.contactForce;
     const bool propagated = estimator == ContactForce::Impulse && settings_.propagationRings > 0 &&
                             settings_.propagationWeight > 0 && settings_.collisionMethod == CollisionMethod::Improved;
@@ -564,11 +559,7 @@ class Solver {
     contactForces_.set(layout::kNormalOnly, unsigned(settings_.normalForceOnly));
     contactForces_.set(layout::kPropagated, unsigned(propagated));
     contactForces_.dispatch(n);
-    bodySumKernel_.set(layout::kCount, n);
-    glUseProgram(bodySumKernel_.id());
-    glDispatchCompute(GLuint(nb), 1, 1);
-    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
-    const std::vector<layout::BodySum> sums = bodySums_.read();
+    const std::vector<layout::BodySum> sums = sumPushes();
     std::vector<float> share(nb, 1.0f);
     bool partial = false;
     for (std::size_t b = 0; b < nb; ++b) {
@@ -579,7 +570,8 @@ class Solver {
       const double bodySide = body.inverseMass() * ef.squaredNorm() + et.dot(body.inverseInertiaWorld() * et);
       const double vertexSide = sum.exchangeForce[3];
       const double s = bodySide > 0 ? vertexSide / (vertexSide + bodySide) : 1.0;
-      Eigen::Vector3d force = vec(sum.directForce) + s * ef, torque = vec(sum.directTorque) + s * et;
+      Eigen::Vector3d force = bodyForce_[b] + vec(sum.directForce) + s * ef;  // after the repulsion's
+      Eigen::Vector3d torque = bodyTorque_[b] + vec(sum.directTorque) + s * et;
       if (sum.pinchForce[3] > 0) force += vec(sum.pinchForce) / sum.pinchForce[3], torque += vec(sum.pinchTorque) / sum.pinchForce[3];
       body.applyForceAndTorque(force, torque);
       bodyForce_[b] = force;
@@ -591,6 +583,25 @@ class Solver {
     shares_.write(share);
     shareKernel_.set(layout::kCount, n);
     shareKernel_.dispatch(n);
+  }
+
+  /// The pushes every vertex wrote (pushes_), summed per body in double (body_sums.comp) and read back.
+  std::vector<layout::BodySum> sumPushes() {
+    bodySumKernel_.set(layout::kCount, unsigned(vertexCount()));
+    glUseProgram(bodySumKernel_.id());
+    glDispatchCompute(GLuint(bodies_.size()), 1, 1);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+    return bodySums_.read();
+  }
+
+  /// What a coupled body's repulsion region took from or gave the vertices, reversed onto the body
+  /// (gatherRepulsionForces): the pushes its repel kernel wrote, summed, start the substep's force and torque.
+  void gatherRepulsionForces() {
+    const std::vector<layout::BodySum> sums = sumPushes();
+    for (std::size_t b = 0; b < sums.size(); ++b) {
+      bodyForce_[b] += Eigen::Vector3d(sums[b].directForce[0], sums[b].directForce[1], sums[b].directForce[2]);
+      bodyTorque_[b] += Eigen::Vector3d(sums[b].directTorque[0], sums[b].directTorque[1], sums[b].directTorque[2]);
+    }
   }
 
   /// All contacts of a substep (projectAllContacts): per solid the vertex pass, then (a curved solid, when
@@ -651,6 +662,8 @@ class Solver {
     rings_.bind(layout::kPropagation);
     flags_.bind(layout::kFlags);
     if (coupled_) {
+      bodySums_.bind(layout::kBodySums);
+      shares_.bind(layout::kShares);
       vStart_.bind(layout::kVStart);
       vPre_.bind(layout::kVPre);
       lines_.bind(layout::kLines);
@@ -661,12 +674,18 @@ class Solver {
     if (repulsive_) {
       for (const SolidPass& p : passes_) {
         if (!(p.repulsionRadius > 0)) continue;
-        const Program& k = kernels_[p.code].repel;
+        const bool body = p.motion.body >= 0;
+        const Program& k = body ? kernels_[p.code].repelBody : kernels_[p.code].repel;
         setSolidUniforms(k, p);
         k.set(layout::kCount, n);
         glProgramUniform2f(k.id(), layout::kRepulsion, 1.0f / p.repulsionRadius,
                            p.falloff == Falloff::Smooth ? 1.0f : 0.0f);
+        if (body) {
+          k.set(layout::kStep, h);
+          k.set(layout::kNormalOnly, unsigned(settings_.normalForceOnly));
+        }
         k.dispatch(n);
+        if (body) gatherRepulsionForces();
       }
     }
 
@@ -811,7 +830,7 @@ class Solver {
   bool reconcile_ = false;   ///< a vertex may touch several surfaces this substep (a curved solid, or several)
   struct ShapeKernels {  ///< the collision kernels compiled for one shape type (compileFor)
     Program vertices, faces, repel;
-    Program verticesBody, facesBody;  ///< for a coupled body's solid: the contacts' lines kept too
+    Program verticesBody, facesBody, repelBody;  ///< for a coupled body's solid: its lines and pushes kept too
     bool ready = false, bodyReady = false;
   };
   std::array<ShapeKernels, 8> kernels_;  ///< by layout::ShapeCode
