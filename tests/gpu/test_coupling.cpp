@@ -95,7 +95,7 @@ TEST_CASE("coupling on the GPU: a ball hitting a free cloth keeps the total mome
   CHECK((gpu.after - gpu.before).norm() <= c.tolerance * gpu.before.norm());
   if (method == drape::CollisionMethod::Vertex) {
     // Vertex contacts only: the GPU does the CPU's passes in its order, so the ball leaves with the CPU's
-    // velocity to rounding (measured within 4e-5 m/s).
+    // velocity to rounding (measured 2e-6 to 8.1e-5 m/s over the estimators, with and without the region).
     CHECK((gpu.ballVelocity - cpu.ballVelocity).norm() <= 1e-4);
   } else {
     // The face pass goes colour by colour on the GPU, in index order on the CPU: another order of the same
