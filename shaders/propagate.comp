@@ -25,16 +25,21 @@ void main() {
   for (uint k = neighbourOffsets[j]; k < neighbourOffsets[j + 1u]; ++k) {
     const uint i = neighbours[k];
     if (ring == 1u) {
-      const Contact c = contacts[i];
-      if (c.slots.x == 0u || c.normalDv.x <= 0.0) continue;
+      // Only the fields read here are loaded (a whole record is 192 bytes).
+      const uint slots = contacts[i].slots.x;
+      const float gained = contacts[i].normalDv.x;
+      if (slots == 0u || gained <= 0.0) continue;
       // ContactBuffer::normal: the slots' normals weighted by their corrections, normalised (the first slot's if
       // none); ContactBuffer::solidVelocity: the first slot's.
       precise vec3 weighted = vec3(0.0);
-      for (uint k = 0u; k < c.slots.x; ++k) weighted = weighted + c.normal[k].w * c.normal[k].xyz;
+      for (uint k = 0u; k < slots; ++k) {
+        const vec4 nk = contacts[i].normal[k];
+        weighted = weighted + nk.w * nk.xyz;
+      }
       precise const float len = length3(weighted);
-      normalSum = normalSum + (len > 0.0 ? weighted / len : c.normal[0].xyz);
-      velocitySum = velocitySum + c.velocity[0].xyz;
-      amountSum = amountSum + c.normalDv.x;
+      normalSum = normalSum + (len > 0.0 ? weighted / len : contacts[i].normal[0].xyz);
+      velocitySum = velocitySum + contacts[i].velocity[0].xyz;
+      amountSum = amountSum + gained;
     } else {
       const Ring r = rings[i];
       if (r.reached != ring - 1u || r.amount <= 0.0) continue;

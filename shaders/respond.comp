@@ -19,9 +19,9 @@ layout(location = DRAPE_U_NORMAL_DAMPING) uniform float normalDamping;
 void main() {
   const uint i = gl_GlobalInvocationID.x;
   if (i >= count) return;
-  const Contact c = contacts[i];
-  const int slots = int(c.slots.x);
+  const int slots = int(contacts[i].slots.x);  // most vertices touch nothing: read the count alone first
   if (slots == 0) return;
+  const Contact c = contacts[i];
   vec3 vi = v[i].xyz;
 #if DRAPE_FRICTION
   const vec4 xw = x[i];
