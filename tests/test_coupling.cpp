@@ -3,6 +3,8 @@
 #include <drape/drape.hpp>
 #include <drape/rigid/coupled.hpp>
 
+#include "coupling_helpers.hpp"
+
 #include <catch2/catch.hpp>
 
 #include <cmath>
@@ -10,28 +12,9 @@
 
 namespace {
 
-template <class S> std::shared_ptr<const drape::ClothAsset<S>> squareCloth(int n, double spacing, double z) {
-  drape::GridDesc grid;
-  grid.nx = grid.ny = n;
-  grid.spacing = spacing;
-  grid.placement.position = {0, 0, z};
-  return std::make_shared<const drape::ClothAsset<S>>(drape::ClothAsset<S>::grid(grid));
-}
-
-template <class S> Eigen::Vector3d clothMomentum(const drape::Solver<S>& cloth) {
-  Eigen::Vector3d p = Eigen::Vector3d::Zero();
-  for (drape::Index i = 0; i < cloth.vertexCount(); ++i)
-    if (cloth.state().invMass[i] > 0) p += cloth.velocity(i) / double(cloth.state().invMass[i]);
-  return p;
-}
-
-/// A rigid world in empty space: no gravity, no ground.
-drape::RigidSettings emptySpace() {
-  drape::RigidSettings rigid;
-  rigid.gravity.setZero();
-  rigid.ground = false;
-  return rigid;
-}
+using drape::test::clothMomentum;
+using drape::test::emptySpace;
+using drape::test::squareCloth;
 
 }  // namespace
 

@@ -4,6 +4,7 @@
 // comparisons of CPU and GPU arrays.
 
 #include <drape/gpu/solver.hpp>
+#include <drape/metrics.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -25,6 +26,30 @@ template <class A, class B> double largestDifference(const A& a, const B& b) {
       worst = std::isnan(d) ? std::numeric_limits<double>::infinity() : std::max(worst, d);
     }
   return worst;
+}
+
+/// What a scene stepped side by side on the CPU and the GPU solver gave: the deepest penetration of each, the
+/// largest gap between the cloth centres' heights, the CPU cloth's final centre height, and the trembling of each
+/// from frame `settleFrames` on.
+struct SideBySide {
+  double cpuDepth = 0, gpuDepth = 0, heightGap = 0, cpuZ = 0;
+  TrembleMeter cpuMeter, gpuMeter;
+};
+template <class Cpu> SideBySide stepSideBySide(Cpu& cpu, gpu::Solver& gpu, int frames, int settleFrames, double dt = 1.0 / 60) {
+  SideBySide r;
+  for (int frame = 1; frame <= frames; ++frame) {
+    cpu.step(dt);
+    gpu.step(dt);
+    r.cpuDepth = std::max(r.cpuDepth, penetration(cpu).depth);
+    r.gpuDepth = std::max(r.gpuDepth, penetration(gpu).depth);
+    double zc = 0, zg = 0;
+    for (Index i = 0; i < cpu.vertexCount(); ++i) zc += cpu.position(i).z(), zg += gpu.position(i).z();
+    r.cpuZ = zc / double(cpu.vertexCount());
+    r.heightGap = std::max(r.heightGap, std::abs(zc - zg) / double(cpu.vertexCount()));
+    r.cpuMeter.frame(cpu, dt, frame > settleFrames);
+    r.gpuMeter.frame(gpu, dt, frame > settleFrames);
+  }
+  return r;
 }
 
 }  // namespace drape::test

@@ -7,6 +7,7 @@
 #include <drape/drape.hpp>
 #include <drape/rigid/coupled.hpp>
 
+#include "../coupling_helpers.hpp"
 #include "rigid_rain.hpp"
 
 #include <catch2/catch.hpp>
@@ -19,28 +20,11 @@ namespace {
 
 using drape::Index;
 
+using drape::test::clothMomentum;
+using drape::test::emptySpace;
+
 std::shared_ptr<const drape::ClothAsset<float>> squareCloth(int n, double spacing, double z) {
-  drape::GridDesc grid;
-  grid.nx = grid.ny = n;
-  grid.spacing = spacing;
-  grid.placement.position = {0, 0, z};
-  return std::make_shared<const drape::ClothAsset<float>>(drape::ClothAsset<float>::grid(grid));
-}
-
-template <class Cloth> Eigen::Vector3d clothMomentum(const Cloth& cloth) {
-  Eigen::Vector3d p = Eigen::Vector3d::Zero();
-  const auto& state = cloth.state();
-  for (Index i = 0; i < cloth.vertexCount(); ++i)
-    if (state.invMass[std::size_t(i)] > 0)
-      p += state.v[std::size_t(i)].template cast<double>() / double(state.invMass[std::size_t(i)]);
-  return p;
-}
-
-drape::RigidSettings emptySpace() {
-  drape::RigidSettings rigid;
-  rigid.gravity.setZero();
-  rigid.ground = false;
-  return rigid;
+  return drape::test::squareCloth<float>(n, spacing, z);
 }
 
 /// A ball (density 100, radius 6 cm) shot at 2 m/s into a free 21 x 21 cloth in empty space, off centre, for

@@ -198,28 +198,14 @@ TEST_CASE("a cloth dropped on a ball: the GPU and CPU solvers agree on penetrati
   drape::gpu::Solver gpu(drape::test::gpuContext(), asset, settings, 0.2);
   cpu.addSolid(ball);
   gpu.addSolid(ball);
-  double cpuDepth = 0, gpuDepth = 0, heightGap = 0;
-  auto centreHeight = [](const auto& s) {
-    double z = 0;
-    for (Index i = 0; i < s.vertexCount(); ++i) z += s.position(i).z();
-    return z / double(s.vertexCount());
-  };
-  drape::TrembleMeter cpuMeter, gpuMeter;
-  for (int frame = 1; frame <= 120; ++frame) {
-    cpu.step(1.0 / 60);
-    gpu.step(1.0 / 60);
-    cpuDepth = std::max(cpuDepth, drape::penetration(cpu).depth);
-    gpuDepth = std::max(gpuDepth, drape::penetration(gpu).depth);
-    heightGap = std::max(heightGap, std::abs(centreHeight(cpu) - centreHeight(gpu)));
-    cpuMeter.frame(cpu, 1.0 / 60, frame > 60);
-    gpuMeter.frame(gpu, 1.0 / 60, frame > 60);
-  }
-  INFO("deepest penetration CPU " << cpuDepth << " m, GPU " << gpuDepth << " m; centre height gap " << heightGap
-                                  << " m; trembling rms CPU " << cpuMeter.rms() << ", GPU " << gpuMeter.rms() << " m/s");
-  REQUIRE(centreHeight(cpu) < 0.75);  // it has fallen onto the ball (whose top is at 0.7 m) and drapes
-  CHECK(gpuDepth <= std::max(2 * cpuDepth, 1e-4));
-  CHECK(heightGap <= 0.01);
-  CHECK(gpuMeter.rms() <= 2 * cpuMeter.rms() + 1e-3);
+  const auto r = drape::test::stepSideBySide(cpu, gpu, 120, 60);
+  INFO("deepest penetration CPU " << r.cpuDepth << " m, GPU " << r.gpuDepth << " m; centre height gap "
+                                  << r.heightGap << " m; trembling rms CPU " << r.cpuMeter.rms() << ", GPU "
+                                  << r.gpuMeter.rms() << " m/s");
+  REQUIRE(r.cpuZ < 0.75);  // it has fallen onto the ball (whose top is at 0.7 m) and drapes
+  CHECK(r.gpuDepth <= std::max(2 * r.cpuDepth, 1e-4));
+  CHECK(r.heightGap <= 0.01);
+  CHECK(r.gpuMeter.rms() <= 2 * r.cpuMeter.rms() + 1e-3);
 }
 
 TEST_CASE("a picture shows the cloth where the camera looks, over the ground, under the sky", "[gpu]") {
@@ -387,22 +373,12 @@ TEST_CASE("a cloth dropped on a box, a capsule, a cylinder or a hull: GPU and CP
     drape::gpu::Solver gpu(drape::test::gpuContext(), asset, drape::Settings{}, 0.2);
     cpu.addSolid(solid);
     gpu.addSolid(solid);
-    double cpuDepth = 0, gpuDepth = 0, heightGap = 0, cpuZ = 0;
-    for (int frame = 1; frame <= 90; ++frame) {
-      cpu.step(1.0 / 60);
-      gpu.step(1.0 / 60);
-      cpuDepth = std::max(cpuDepth, drape::penetration(cpu).depth);
-      gpuDepth = std::max(gpuDepth, drape::penetration(gpu).depth);
-      double zc = 0, zg = 0;
-      for (Index i = 0; i < cpu.vertexCount(); ++i) zc += cpu.position(i).z(), zg += gpu.position(i).z();
-      cpuZ = zc / cpu.vertexCount();
-      heightGap = std::max(heightGap, std::abs(zc - zg) / cpu.vertexCount());
-    }
-    INFO("deepest penetration CPU " << cpuDepth << " m, GPU " << gpuDepth << " m; centre height gap " << heightGap
-                                    << " m; CPU centre at " << cpuZ << " m");
-    REQUIRE(cpuZ < 0.8);  // it fell onto the solid
-    CHECK(gpuDepth <= std::max(2 * cpuDepth, 1e-4));
-    CHECK(heightGap <= 0.01);
+    const auto r = drape::test::stepSideBySide(cpu, gpu, 90, 60);
+    INFO("deepest penetration CPU " << r.cpuDepth << " m, GPU " << r.gpuDepth << " m; centre height gap "
+                                    << r.heightGap << " m; CPU centre at " << r.cpuZ << " m");
+    REQUIRE(r.cpuZ < 0.8);  // it fell onto the solid
+    CHECK(r.gpuDepth <= std::max(2 * r.cpuDepth, 1e-4));
+    CHECK(r.heightGap <= 0.01);
   };
   SECTION("box, corner up") {
     drape::Solid<drape::Box> box;
@@ -470,20 +446,10 @@ TEST_CASE("a cloth dropped on meshed solids (grid fields): GPU and CPU agree on 
   drape::gpu::Solver gpu(drape::test::gpuContext(), asset, drape::Settings{}, 0.2);
   cpu.addSolid(solid);
   gpu.addSolid(solid);
-  double cpuDepth = 0, gpuDepth = 0, heightGap = 0, cpuZ = 0;
-  for (int frame = 1; frame <= 60; ++frame) {
-    cpu.step(1.0 / 60);
-    gpu.step(1.0 / 60);
-    cpuDepth = std::max(cpuDepth, drape::penetration(cpu).depth);
-    gpuDepth = std::max(gpuDepth, drape::penetration(gpu).depth);
-    double zc = 0, zg = 0;
-    for (Index i = 0; i < cpu.vertexCount(); ++i) zc += cpu.position(i).z(), zg += gpu.position(i).z();
-    cpuZ = zc / cpu.vertexCount();
-    heightGap = std::max(heightGap, std::abs(zc - zg) / cpu.vertexCount());
-  }
-  INFO("deepest penetration CPU " << cpuDepth << " m, GPU " << gpuDepth << " m; centre height gap " << heightGap
-                                  << " m; CPU centre at " << cpuZ << " m");
-  REQUIRE(cpuZ < 0.4);  // it fell onto the solid
-  CHECK(gpuDepth <= std::max(2 * cpuDepth, 1e-4));
-  CHECK(heightGap <= 0.01);
+  const auto r = drape::test::stepSideBySide(cpu, gpu, 60, 60);
+  INFO("deepest penetration CPU " << r.cpuDepth << " m, GPU " << r.gpuDepth << " m; centre height gap "
+                                  << r.heightGap << " m; CPU centre at " << r.cpuZ << " m");
+  REQUIRE(r.cpuZ < 0.4);  // it fell onto the solid
+  CHECK(r.gpuDepth <= std::max(2 * r.cpuDepth, 1e-4));
+  CHECK(r.heightGap <= 0.01);
 }

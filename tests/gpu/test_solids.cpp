@@ -247,25 +247,12 @@ TEST_CASE("a cloth pinched between a ball and the floor, by a box's corner: GPU 
   gpu.addSolid(floor);
   gpu.addSolid(ball);
   gpu.addSolid(box);
-  double cpuDepth = 0, gpuDepth = 0, heightGap = 0, cpuZ = 0;
-  drape::TrembleMeter cpuMeter, gpuMeter;
-  for (int frame = 1; frame <= 90; ++frame) {
-    cpu.step(1.0 / 60);
-    gpu.step(1.0 / 60);
-    cpuDepth = std::max(cpuDepth, drape::penetration(cpu).depth);
-    gpuDepth = std::max(gpuDepth, drape::penetration(gpu).depth);
-    double zc = 0, zg = 0;
-    for (Index i = 0; i < cpu.vertexCount(); ++i) zc += cpu.position(i).z(), zg += gpu.position(i).z();
-    cpuZ = zc / cpu.vertexCount();
-    heightGap = std::max(heightGap, std::abs(zc - zg) / cpu.vertexCount());
-    cpuMeter.frame(cpu, 1.0 / 60, frame > 60);
-    gpuMeter.frame(gpu, 1.0 / 60, frame > 60);
-  }
-  INFO("deepest penetration CPU " << cpuDepth << " m, GPU " << gpuDepth << " m; centre height gap " << heightGap
-                                  << " m; CPU centre at " << cpuZ << " m; trembling rms CPU " << cpuMeter.rms()
-                                  << ", GPU " << gpuMeter.rms() << " m/s");
-  REQUIRE(cpuZ < 0.2);  // it fell onto the solids and the floor
-  CHECK(gpuDepth <= std::max(2 * cpuDepth, 1e-4));
-  CHECK(heightGap <= 0.01);
-  CHECK(gpuMeter.rms() <= 2 * cpuMeter.rms() + 1e-3);
+  const auto r = drape::test::stepSideBySide(cpu, gpu, 90, 60);
+  INFO("deepest penetration CPU " << r.cpuDepth << " m, GPU " << r.gpuDepth << " m; centre height gap "
+                                  << r.heightGap << " m; CPU centre at " << r.cpuZ << " m; trembling rms CPU "
+                                  << r.cpuMeter.rms() << ", GPU " << r.gpuMeter.rms() << " m/s");
+  REQUIRE(r.cpuZ < 0.2);  // it fell onto the solids and the floor
+  CHECK(r.gpuDepth <= std::max(2 * r.cpuDepth, 1e-4));
+  CHECK(r.heightGap <= 0.01);
+  CHECK(r.gpuMeter.rms() <= 2 * r.cpuMeter.rms() + 1e-3);
 }
