@@ -219,7 +219,8 @@ drape::CompiledSolid<drape::Sphere, float> pokingBall(const drape::ClothAsset<fl
 }
 
 /// The collision passes against the ball: 0 the vertex pass, 1 the face pass (a dispatch per colour). The
-/// positions are restored from a copy before each pass (included: a buffer copy).
+/// positions are restored from a copy before each pass, and for the face pass the records cleared (included: a
+/// buffer copy, and a clear).
 void BM_CollideGpu(benchmark::State& state) {
   std::string why;
   gpu::Context* ctx = context(why);
@@ -250,12 +251,16 @@ void BM_CollideGpu(benchmark::State& state) {
   k.set(layout::kBoxLow, ball.boxLow.x(), ball.boxLow.y(), ball.boxLow.z());
   k.set(layout::kBoxHigh, ball.boxHigh.x(), ball.boxHigh.y(), ball.boxHigh.z());
   glProgramUniform1i(k.id(), layout::kPgdIterations, 12);
-  glProgramUniform1i(k.id(), layout::kPass, -1);
-  k.set(layout::kFresh, 1u);
+  if (!facePass) {  // the vertex pass starts every record (fresh); the face pass's records are cleared below
+    glProgramUniform1i(k.id(), layout::kPass, -1);
+    k.set(layout::kFresh, 1u);
+  }
   const auto bytes = GLsizeiptr(pos.size() * sizeof(layout::Vertex));
   for (auto _ : state) {
+    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
     glCopyNamedBufferSubData(pristine.id(), x.id(), 0, 0, bytes);
     if (facePass) {
+      glClearNamedBufferData(contacts.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, nullptr);  // no record yet
       for (std::size_t c = 0; c + 1 < coloured.offsets.size(); ++c) {
         k.set(layout::kFirst, unsigned(coloured.offsets[c]));
         k.set(layout::kCount, unsigned(coloured.offsets[c + 1] - coloured.offsets[c]));

@@ -72,7 +72,6 @@ enum Uniform : int {
   kEstimator = 24,      ///< int: the contact-force estimator (0 sub-force, 1 energy, 2 impulse)
   kNormalOnly = 25,     ///< uint: 1 to pass bodies only the normal part of each push
   kPropagated = 26,     ///< uint: 1 to pass on the impulse propagation gave vertices not in contact
-  kBodyCount = 27,      ///< uint: how many coupled bodies
   kBoxLow = 28,         ///< vec3: the solid's bounding box (the cloth's local frame), outside which phi is at least
   kBoxHigh = 29,        ///<   the distance to the box (placeBounds); +-FLT_MAX for an unbounded solid
   kShape = 32,  ///< vec4[5] (locations 32-36): the solid's field, packed by packShape (gpu/shapes.hpp)
@@ -236,7 +235,6 @@ inline std::string preamble(const std::string& defines = {}) {
   s += define("DRAPE_U_ESTIMATOR", kEstimator);
   s += define("DRAPE_U_NORMAL_ONLY", kNormalOnly);
   s += define("DRAPE_U_PROPAGATED", kPropagated);
-  s += define("DRAPE_U_BODY_COUNT", kBodyCount);
   s += define("DRAPE_U_BOX_LOW", kBoxLow);
   s += define("DRAPE_U_BOX_HIGH", kBoxHigh);
   // A kernel compiled without a choice gets the plane and friction (so every kernel compiles on its own).

@@ -118,12 +118,17 @@ template <class T> class Buffer {
                       GL_DYNAMIC_COPY);
   }
   /// Overwrites the first data.size() elements.
+  /// (Both wait for the shaders' writes before them: GL_BUFFER_UPDATE_BARRIER_BIT.)
   void write(const std::vector<T>& data) {
-    if (!data.empty()) glNamedBufferSubData(id_, 0, GLsizeiptr(data.size() * sizeof(T)), data.data());
+    if (data.empty()) return;
+    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+    glNamedBufferSubData(id_, 0, GLsizeiptr(data.size() * sizeof(T)), data.data());
   }
   std::vector<T> read() const {
     std::vector<T> out(size_);
-    if (size_) glGetNamedBufferSubData(id_, 0, GLsizeiptr(size_ * sizeof(T)), out.data());
+    if (!size_) return out;
+    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+    glGetNamedBufferSubData(id_, 0, GLsizeiptr(size_ * sizeof(T)), out.data());
     return out;
   }
   void bind(layout::Binding b) const { glBindBufferBase(GL_SHADER_STORAGE_BUFFER, b, id_); }

@@ -5,16 +5,17 @@
 //
 // What it runs so far, for float: predict, the distance constraints (stretch, shear, bending; one dispatch per
 // colour, all iterations, with the XPBD multipliers when several passes meet a compliant set), the velocity
-// update, and against any number of solids (planes, spheres, boxes, capsules, cylinders and grid fields from
-// meshes, static or kinematic, visited in the CPU solver's order: by shape type, then as added) the repulsion
+// update, and against any number of solids (planes, spheres, boxes, capsules, cylinders, hulls and grid fields from
+// meshes, static, kinematic or dynamic, visited in the CPU solver's order: by shape type, then as added) the repulsion
 // region and the improved and vertex-only collision methods: per solid the vertex pass and the face pass
 // (bounding-sphere cull and the search for the deepest point, cutting planes on convex fields and projected
 // gradient descent on a grid's, one dispatch per colour of faces that share no vertex), each vertex recording up
 // to three differently facing surfaces as the CPU does; where surfaces meet, the placement outside all of a
 // vertex's contact planes and the settle passes; the velocity split with Coulomb friction, per surface, then
 // reconciled; and propagation ring by ring; and the local origin following the cloth, as on the CPU; fixed
-// vertices (inverse mass 0) and pins with targets. Hulls, the baseline method and the rigid-body coupling are
-// CPU-only for now: asking for one is an error that says so, so a scene never silently loses it.
+// vertices (inverse mass 0) and pins with targets. Convex hulls, the baseline method and the two-way coupling with
+// dynamic bodies run too (see the kernels' list in README.md, "On the GPU"). The GPU always culls (boxes, bounding
+// spheres), whatever Settings::culling and broadPhase say: the contacts are the same.
 //
 // Against planes the GPU gives the CPU's bits on llvmpipe. Against a curved solid the face pass visits the
 // faces colour by colour where the CPU goes in index order (another order of the same Gauss-Seidel pass); the
@@ -148,7 +149,7 @@ class Solver {
   /// solver does. The kernels for its shape are compiled on the first solid of that shape, a mesh's grid nodes
   /// uploaded on the first solid with that grid.
   template <class Shape> Index addSolid(const Solid<Shape>& solid) {
-    static_assert(kHasShape<Shape>, "the GPU solver has no field for this shape yet (hulls are CPU-only)");
+    static_assert(kHasShape<Shape>, "the GPU solver has no field for this shape type");
     drape::detail::validateSolid(solid, "solid");
     checkSupported(solid);
     context_->makeCurrent();
@@ -354,7 +355,8 @@ class Solver {
   }
 
   /// The shape data a solid's field reads from its own buffer (layout::kShapeData): a mesh's grid nodes, a hull's
-  /// faces and edges. Each grid or hull is uploaded once, however many solids share it.
+  /// faces and edges. Each grid is uploaded once, however many solids share it; each hull solid builds its own
+  /// query data (compileSolid), so it has its own upload.
   template <class Shape> static std::shared_ptr<const void> shapeDataKey(const CompiledSolid<Shape, float>& c) {
     if constexpr (std::is_same_v<Shape, MeshShape>) return c.sdf.grid;
     else if constexpr (std::is_same_v<Shape, ConvexHull>) return c.sdf.hull;
@@ -389,7 +391,7 @@ class Solver {
     faces_.assign(coloured.faces);
   }
 
-  /// Settings the GPU runs (the rest are rejected by name).
+  /// Checks the settings (Settings::validate): the GPU runs every valid setting.
   static void check(const Settings& s) { s.validate(); }
   template <class Shape> static void checkSupported(const Solid<Shape>&) {}
 
@@ -472,17 +474,19 @@ class Solver {
     }
   }
 
-  /// A collision kernel's uniforms for one solid (its field, motion and friction), and its grid's nodes bound.
-  void setSolidUniforms(const Program& k, const SolidPass& p) const {
+  /// A kernel's uniforms for one solid (its field and motion; for a collision kernel, `collide`, its friction and
+  /// box as well), and its shape data bound.
+  void setSolidUniforms(const Program& k, const SolidPass& p, bool collide = true) const {
     const SolidMotion<float>& m = p.motion;
     k.set(layout::kThickness, float(settings_.thickness));
     setShape(k.id(), p.field);
     k.set(layout::kSolidCentre, m.centre.x(), m.centre.y(), m.centre.z());
     k.set(layout::kSolidLinear, m.linearVelocity.x(), m.linearVelocity.y(), m.linearVelocity.z());
     k.set(layout::kSolidAngular, m.angularVelocity.x(), m.angularVelocity.y(), m.angularVelocity.z());
-    glProgramUniform2f(k.id(), layout::kFriction, m.staticFriction, m.dynamicFriction);
     if (p.data) p.data->bind(layout::kShapeData);
     if (m.body >= 0) glProgramUniform1i(k.id(), layout::kBody, m.body);
+    if (!collide) return;  // the repel kernel declares no friction or box
+    glProgramUniform2f(k.id(), layout::kFriction, m.staticFriction, m.dynamicFriction);
     k.set(layout::kBoxLow, p.boxLow.x(), p.boxLow.y(), p.boxLow.z());
     k.set(layout::kBoxHigh, p.boxHigh.x(), p.boxHigh.y(), p.boxHigh.z());
   }
@@ -617,8 +621,8 @@ class Solver {
     if (!reconcile_) return;
     settle(-1);
     if (passes_.size() < 2) return;
+    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);  // a clear after shader writes
     glClearNamedBufferData(flags_.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, nullptr);
-    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
     const float slack = 1e-4f * float(settings_.thickness);
     for (int pass = 0; pass < kSettlePasses; ++pass) {
       for (const SolidPass& p : passes_) vertexPass(p, false, pass, slack);
@@ -676,7 +680,7 @@ class Solver {
         if (!(p.repulsionRadius > 0)) continue;
         const bool body = p.motion.body >= 0;
         const Program& k = body ? kernels_[p.code].repelBody : kernels_[p.code].repel;
-        setSolidUniforms(k, p);
+        setSolidUniforms(k, p, false);
         k.set(layout::kCount, n);
         glProgramUniform2f(k.id(), layout::kRepulsion, 1.0f / p.repulsionRadius,
                            p.falloff == Falloff::Smooth ? 1.0f : 0.0f);
@@ -704,6 +708,7 @@ class Solver {
     const float alphas[3] = {float(settings_.stretchCompliance) / h2, float(settings_.shearCompliance) / h2,
                              float(settings_.bendingCompliance) / h2};
     const int iterations = settings_.iterationCount;
+    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);  // the clears and writes below come after shader writes
     if (iterations > 1) glClearNamedBufferData(lambdas_.id(), GL_R32F, GL_RED, GL_FLOAT, nullptr);
     const DistanceSet<float>* sets[3] = {&asset_->stretch, &asset_->shear, &asset_->bending};
     if (!pins_.empty()) {  // the targets in this substep's local frame, and the pins' multipliers zeroed
@@ -773,8 +778,8 @@ class Solver {
     if (settings_.collisionMethod != CollisionMethod::Improved || settings_.propagationRings <= 0 ||
         !(settings_.propagationWeight > 0))
       return;
+    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
     glClearNamedBufferData(rings_.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, nullptr);
-    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
     propagate_.set(layout::kCount, n);
     propagate_.set(layout::kWeight, float(settings_.propagationWeight));
     for (int ring = 1; ring <= settings_.propagationRings; ++ring) {
