@@ -39,7 +39,7 @@ int main(int argc, char** argv) {
   app.add_option("--method", method, "collision method")->check(CLI::IsMember({"improved", "baseline", "vertex"}))->capture_default_str();
   app.add_option("--scalar", scalar, "floating-point type")->check(CLI::IsMember({"float", "double"}))->capture_default_str();
   app.add_flag("--json", json, "print one JSON object on stdout");
-  app.add_flag("--gpu", gpu, "run on the GPU (float; improved or vertex method)");
+  app.add_flag("--gpu", gpu, "run on the GPU (float; every method)");
   app.add_option("--backend", backend, "GPU context: auto (EGL hardware device, else OSMesa), egl or osmesa")
       ->check(CLI::IsMember({"auto", "egl", "osmesa"}))
       ->capture_default_str();

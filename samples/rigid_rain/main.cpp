@@ -332,6 +332,7 @@ nlohmann::ordered_json run(const Options& o, [[maybe_unused]] Painter* painter, 
   j["dt"] = o.config.dt;
   j["substeps"] = o.config.subSteps;
   j["iterations"] = o.config.base.iterationCount;
+  j["method"] = drape::toString(o.config.base.collisionMethod);
   j["vertices"] = n;
   j["faces"] = cloth.asset().faceCount();
   j["cloth_mass"] = clothMass;
@@ -374,7 +375,8 @@ nlohmann::ordered_json run(const Options& o, [[maybe_unused]] Painter* painter, 
 int main(int argc, char** argv) {
   Options o;
   auto& c = o.config;
-  std::string estimator = drape::toString(c.estimator), scalar = "float";
+  std::string estimator = drape::toString(c.estimator), scalar = "float",
+              method = drape::toString(c.base.collisionMethod);
   // By default every shape the cloth solver takes as a solid (all five once Solver<S> has Cylinder and ConvexHull).
   std::vector<std::string> shapes;
   for (RainShape k : drape::scenes::kRainShapes)
@@ -400,6 +402,9 @@ int main(int argc, char** argv) {
   app.add_option("--iterations", c.base.iterationCount, "cloth constraint passes per substep")
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
+  app.add_option("--method", method, "cloth-solid collision method (vertex: vertex contacts only, the thesis's)")
+      ->check(CLI::IsMember({"improved", "baseline", "vertex"}))
+      ->capture_default_str();
   app.add_option("--scalar", scalar, "the cloth's floating-point type")->check(CLI::IsMember({"float", "double"}))->capture_default_str();
   app.add_option("--trace", o.traceFile, "CSV per step: time, timing, penetration, speeds, strain, heights");
   app.add_option("--obj", o.objDir, "directory for one OBJ file per frame (cloth and bodies)");
@@ -419,6 +424,9 @@ int main(int argc, char** argv) {
   }
   try {
     c.estimator = drape::scenes::contactForceFromString(estimator);
+    c.base.collisionMethod = method == "baseline" ? drape::CollisionMethod::Baseline
+                             : method == "vertex" ? drape::CollisionMethod::Vertex
+                                                  : drape::CollisionMethod::Improved;
     c.shapes = 0;
     for (const auto& s : shapes) c.shapes |= unsigned(drape::scenes::rainShapeFromString(s));
     if (!o.objDir.empty()) std::filesystem::create_directories(o.objDir);
