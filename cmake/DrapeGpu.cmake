@@ -26,8 +26,9 @@ if(NOT EXISTS ${glad_dir}/src/gl.c)
   endif()
 endif()
 add_library(drape_glad STATIC ${glad_dir}/src/gl.c)
-target_include_directories(drape_glad SYSTEM PUBLIC $<BUILD_INTERFACE:${glad_dir}/include>)
-set_target_properties(drape_glad PROPERTIES POSITION_INDEPENDENT_CODE ON C_VISIBILITY_PRESET hidden)
+target_include_directories(drape_glad SYSTEM PUBLIC $<BUILD_INTERFACE:${glad_dir}/include>
+                                                    $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}/drape/glad>)
+set_target_properties(drape_glad PROPERTIES POSITION_INDEPENDENT_CODE ON C_VISIBILITY_PRESET hidden EXPORT_NAME glad)
 
 # Each shader as a raw string; the delimiter cannot occur in GLSL.
 set(shader_header ${PROJECT_BINARY_DIR}/generated/include/drape/gpu/shader_sources.hpp)
@@ -58,6 +59,16 @@ file(CONFIGURE OUTPUT ${shader_header} CONTENT "${shader_text}" @ONLY)
 
 add_library(drape_gpu INTERFACE)
 add_library(drape::gpu ALIAS drape_gpu)
+set_target_properties(drape_gpu PROPERTIES EXPORT_NAME gpu)
+# Installed, the generated header sits beside the other drape/gpu headers, on drape's own include path; the EGL
+# headers are found again by drapeConfig.cmake, on the consumer's machine.
 target_include_directories(drape_gpu INTERFACE $<BUILD_INTERFACE:${PROJECT_BINARY_DIR}/generated/include>)
-target_include_directories(drape_gpu SYSTEM INTERFACE ${DRAPE_EGL_INCLUDE_DIR})
+target_include_directories(drape_gpu SYSTEM INTERFACE $<BUILD_INTERFACE:${DRAPE_EGL_INCLUDE_DIR}>)
 target_link_libraries(drape_gpu INTERFACE drape drape_glad ${CMAKE_DL_LIBS})
+
+# The install: the loader's library and headers (under include/drape/glad, so they cannot shadow an
+# application's own glad), the generated shader header, and both targets in drape's export (drape::gpu,
+# drape::glad; find_package(drape COMPONENTS gpu)).
+install(TARGETS drape_glad drape_gpu EXPORT drapeTargets ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR})
+install(DIRECTORY ${glad_dir}/include/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/drape/glad)
+install(FILES ${shader_header} DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/drape/gpu)
