@@ -1,5 +1,5 @@
 // DESIGN 6, phase 2, per body (the CPU twin: the sums in gatherContactForces, include/drape/solver.hpp): one
-// workgroup per coupled body adds up, in double, the pushes every vertex passed to it (contact_forces.comp), by
+// workgroup per coupled body (or per body of a range: a repelling body's pushes alone) adds up, in double, the pushes every vertex passed to it (contact_forces.comp), by
 // kind: direct, exchange (with the sum of |f|^2 / m that shareExchanges weighs) and pinch (with their count).
 // Each invocation sums a fixed stride of vertices and the workgroup then adds the partial sums in a fixed tree,
 // so the result has one order however the GPU schedules it: no atomics.
@@ -7,11 +7,12 @@ layout(local_size_x = DRAPE_WORKGROUP) in;
 layout(std430, binding = DRAPE_B_PUSHES) readonly buffer Pushes { BodyPush pushes[]; };
 layout(std430, binding = DRAPE_B_BODY_SUMS) writeonly buffer BodySums { BodySum sums[]; };
 layout(location = DRAPE_U_COUNT) uniform uint count;  // vertices
+layout(location = DRAPE_U_BODY) uniform int firstBody;  // workgroup k sums body firstBody + k
 
 shared dvec4 partial[6][DRAPE_WORKGROUP];
 
 void main() {
-  const int b = int(gl_WorkGroupID.x);
+  const int b = firstBody + int(gl_WorkGroupID.x);
   const uint t = gl_LocalInvocationID.x;
   dvec4 acc[6] = dvec4[6](dvec4(0.0), dvec4(0.0), dvec4(0.0), dvec4(0.0), dvec4(0.0), dvec4(0.0));
   for (uint i = t; i < count; i += uint(DRAPE_WORKGROUP))

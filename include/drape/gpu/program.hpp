@@ -124,11 +124,16 @@ template <class T> class Buffer {
     glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
     glNamedBufferSubData(id_, 0, GLsizeiptr(data.size() * sizeof(T)), data.data());
   }
-  std::vector<T> read() const {
-    std::vector<T> out(size_);
-    if (!size_) return out;
+  std::vector<T> read() const { return read(0, size_); }
+  /// Elements [first, first + count), which must lie in the buffer.
+  std::vector<T> read(std::size_t first, std::size_t count) const {
+    if (first > size_ || count > size_ - first)
+      throw Error("drape::gpu: reading elements [" + std::to_string(first) + ", " + std::to_string(first + count) +
+                  ") of a buffer of " + std::to_string(size_));
+    std::vector<T> out(count);
+    if (!count) return out;
     glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
-    glGetNamedBufferSubData(id_, 0, GLsizeiptr(size_ * sizeof(T)), out.data());
+    glGetNamedBufferSubData(id_, GLintptr(first * sizeof(T)), GLsizeiptr(count * sizeof(T)), out.data());
     return out;
   }
   void bind(layout::Binding b) const { glBindBufferBase(GL_SHADER_STORAGE_BUFFER, b, id_); }

@@ -563,7 +563,7 @@ class Solver {
     contactForces_.set(layout::kNormalOnly, unsigned(settings_.normalForceOnly));
     contactForces_.set(layout::kPropagated, unsigned(propagated));
     contactForces_.dispatch(n);
-    const std::vector<layout::BodySum> sums = sumPushes();
+    const std::vector<layout::BodySum> sums = sumPushes(0, int(bodies_.size()));
     std::vector<float> share(nb, 1.0f);
     bool partial = false;
     for (std::size_t b = 0; b < nb; ++b) {
@@ -589,23 +589,24 @@ class Solver {
     shareKernel_.dispatch(n);
   }
 
-  /// The pushes every vertex wrote (pushes_), summed per body in double (body_sums.comp) and read back.
-  std::vector<layout::BodySum> sumPushes() {
+  /// The pushes every vertex wrote (pushes_) to bodies [first, first + count), summed per body in double
+  /// (body_sums.comp: a workgroup per body, each reading every vertex's pushes) and read back.
+  std::vector<layout::BodySum> sumPushes(int first, int count) {
     bodySumKernel_.set(layout::kCount, unsigned(vertexCount()));
+    glProgramUniform1i(bodySumKernel_.id(), layout::kBody, first);
     glUseProgram(bodySumKernel_.id());
-    glDispatchCompute(GLuint(bodies_.size()), 1, 1);
+    glDispatchCompute(GLuint(count), 1, 1);
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
-    return bodySums_.read();
+    return bodySums_.read(std::size_t(first), std::size_t(count));
   }
 
-  /// What a coupled body's repulsion region took from or gave the vertices, reversed onto the body
-  /// (gatherRepulsionForces): the pushes its repel kernel wrote, summed, start the substep's force and torque.
-  void gatherRepulsionForces() {
-    const std::vector<layout::BodySum> sums = sumPushes();
-    for (std::size_t b = 0; b < sums.size(); ++b) {
-      bodyForce_[b] += Eigen::Vector3d(sums[b].directForce[0], sums[b].directForce[1], sums[b].directForce[2]);
-      bodyTorque_[b] += Eigen::Vector3d(sums[b].directTorque[0], sums[b].directTorque[1], sums[b].directTorque[2]);
-    }
+  /// What coupled body b's repulsion region took from or gave the vertices, reversed onto the body
+  /// (gatherRepulsionForces): the pushes its repel kernel wrote (to b alone), summed, start the substep's force
+  /// and torque. Only b's sum is made and read: a pass over the vertices per repelling body.
+  void gatherRepulsionForces(int b) {
+    const layout::BodySum s = sumPushes(b, 1)[0];
+    bodyForce_[std::size_t(b)] += Eigen::Vector3d(s.directForce[0], s.directForce[1], s.directForce[2]);
+    bodyTorque_[std::size_t(b)] += Eigen::Vector3d(s.directTorque[0], s.directTorque[1], s.directTorque[2]);
   }
 
   /// All contacts of a substep (projectAllContacts): per solid the vertex pass, then (a curved solid, when
@@ -689,7 +690,7 @@ class Solver {
           k.set(layout::kNormalOnly, unsigned(settings_.normalForceOnly));
         }
         k.dispatch(n);
-        if (body) gatherRepulsionForces();
+        if (body) gatherRepulsionForces(p.motion.body);
       }
     }
 
