@@ -709,8 +709,10 @@ class Solver {
     const float alphas[3] = {float(settings_.stretchCompliance) / h2, float(settings_.shearCompliance) / h2,
                              float(settings_.bendingCompliance) / h2};
     const int iterations = settings_.iterationCount;
-    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);  // the clears and writes below come after shader writes
-    if (iterations > 1) glClearNamedBufferData(lambdas_.id(), GL_R32F, GL_RED, GL_FLOAT, nullptr);
+    if (iterations > 1) {
+      glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);  // the clear comes after the last substep's shader writes
+      glClearNamedBufferData(lambdas_.id(), GL_R32F, GL_RED, GL_FLOAT, nullptr);
+    }
     const DistanceSet<float>* sets[3] = {&asset_->stretch, &asset_->shear, &asset_->bending};
     if (!pins_.empty()) {  // the targets in this substep's local frame, and the pins' multipliers zeroed
       std::vector<layout::PinSlot> slots(pins_.size());
