@@ -14,6 +14,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <memory>
 
 namespace {
@@ -191,12 +192,16 @@ TEST_CASE("coupling on the GPU: a box resting on a cloth on the ground gets its 
   CHECK(fastest < 0.05);
 }
 
-TEST_CASE("the rigid rain on the GPU keeps the CPU's invariants: no body through the cloth, none faster than its "
-          "energy allows",
+TEST_CASE("the rigid rain on the GPU keeps the CPU's invariants over 2 s: no body through the cloth, none faster "
+          "than its energy allows",
           "[gpu]") {
-  // The sample's scene (scenes/rigid_rain.hpp), 5 bodies for 0.8 s with the corners pinned, on both solvers.
+  // The sample's scene (scenes/rigid_rain.hpp), 5 bodies with the corners pinned throughout (so that "through
+  // the cloth" keeps its meaning), on both solvers: which bodies lie over the cloth is compared at 0.8 s; the
+  // rest over 2 s. (At 2 s which bodies are still on the cloth is chaos, not an invariant: one body the CPU
+  // keeps on it has rolled off the GPU's, whose face pass visits the faces in another order.)
   drape::scenes::RainConfig config;
   config.bodies = 5;
+  config.release = std::numeric_limits<double>::infinity();
   drape::scenes::RigidRain<float> cpu(config);
   drape::scenes::RigidRain<float, drape::gpu::Solver> gpu(config, drape::test::gpuContext());
   const double g = config.rigid.gravity.norm();
@@ -211,7 +216,7 @@ TEST_CASE("the rigid rain on the GPU keeps the CPU's invariants: no body through
     largestRadius = std::max(largestRadius, body.boundingRadius());
   }
   double cpuDepth = 0, gpuDepth = 0, cpuFastest = 0, gpuFastest = 0;
-  for (int s = 0; s < 80; ++s) {
+  auto stepBoth = [&] {
     cpu.step();
     gpu.step();
     cpuDepth = std::max(cpuDepth, drape::scenes::bodyPenetration(cpu.cloth(), largestRadius));
@@ -220,7 +225,8 @@ TEST_CASE("the rigid rain on the GPU keeps the CPU's invariants: no body through
       cpuFastest = std::max(cpuFastest, cpu.world().body(b).linearVelocity().norm());
       gpuFastest = std::max(gpuFastest, gpu.world().body(b).linearVelocity().norm());
     }
-  }
+  };
+  for (int s = 0; s < 80; ++s) stepBoth();
   // Bodies over the cloth at the end, and those of them whose centre is below the cloth vertex nearest it in x, y
   // (through the cloth). Which body lies where at one instant is not compared: the face pass's other order
   // makes a body still moving on the swinging cloth differ by centimetres (at 0.8 s one was 3.7 cm lower on the
@@ -260,6 +266,20 @@ TEST_CASE("the rigid rain on the GPU keeps the CPU's invariants: no body through
   CHECK(gpuOver == cpuOver);
   CHECK(gpuThrough == 0);
   CHECK(cpuThrough == 0);
+
+  for (int s = 80; s < 200; ++s) stepBoth();  // on to 2 s
+  const auto [cpuOver2, cpuThrough2] = overAndThrough(cpu);
+  const auto [gpuOver2, gpuThrough2] = overAndThrough(gpu);
+  INFO("at 2 s: deepest cloth vertex in a body CPU " << cpuDepth << " m, GPU " << gpuDepth << " m; fastest body CPU "
+                                                      << cpuFastest << ", GPU " << gpuFastest << " m/s; over the cloth CPU "
+                                                      << cpuOver2 << ", GPU " << gpuOver2 << ", through it CPU "
+                                                      << cpuThrough2 << ", GPU " << gpuThrough2);
+  REQUIRE(std::isfinite(gpuFastest));
+  CHECK(gpuDepth <= std::max(2 * cpuDepth, 1e-3));
+  CHECK(gpuFastest <= bound);
+  CHECK(gpuOver2 >= 1);
+  CHECK(gpuThrough2 == 0);
+  CHECK(cpuThrough2 == 0);
 }
 
 TEST_CASE("two GPU runs of a coupled scene are bit-identical (the body sums have one order)", "[gpu]") {
