@@ -1,4 +1,4 @@
-// The GPU against the CPU (issue 5, item 7), in one run: per kernel (ns per item, the kernel dispatched and
+// The GPU against the CPU, in one run: per kernel (ns per item, the kernel dispatched and
 // waited for) and per step of the inclined-plane scene (50x80, 10 substeps, friction 0.3, in contact: 60 frames
 // are run first). The GPU is the one Backend::Auto finds: an EGL hardware device where the machine has one, else
 // Mesa's llvmpipe through OSMesa (DRAPE_GPU_BACKEND=egl|osmesa picks one). On llvmpipe the figures measure a

@@ -1,8 +1,8 @@
-// Rigid bodies: wall time per step against the body count in a rain scene (the thesis's Fig 6.7): random
-// seeded shapes (sphere, box, capsule, cylinder, convex hull) dropped into a region walled by four static
-// (kinematic, zero velocity) boxes on the ground. The region's area grows with the count so that the pile's
-// depth, and so the contacts per body, stay alike. Each timed step follows 1.5 s of settling; the time is
-// the mean of the timed steps, which keep running the same scene.
+// Rigid bodies: wall time per step against the body count in a rain scene (the cloth-rigid coupling thesis's Fig 6.7):
+// random seeded shapes (sphere, box, capsule, cylinder, convex hull) dropped into a region walled by four static
+// (kinematic, zero velocity) boxes on the ground. The region's area grows with the count so that the pile's depth, and
+// so the contacts per body, stay alike. Each timed step follows 1.5 s of settling; the time is the mean of the timed
+// steps, which keep running the same scene.
 //
 //   build-rigid/bench/bench_rigid --benchmark_counters_tabular=true
 //

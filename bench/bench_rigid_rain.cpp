@@ -1,4 +1,4 @@
-// The rigid-body rain on a cloth (the thesis's Fig 6.6, issue 4 item 6; scenes/rigid_rain.hpp): wall time of
+// The rigid-body rain on a cloth (the cloth-rigid coupling thesis's Fig 6.6; scenes/rigid_rain.hpp): wall time of
 // one stepCoupled (the 50x80 cloth and the world, in the same substeps) against the number of bodies, on one
 // thread. Each repetition builds the scene (seed 42, all five shapes, the corners never let go), runs 50 steps
 // so the bodies are on or near the cloth, then times 100 steps; the median over the repetitions is reported.

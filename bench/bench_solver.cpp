@@ -1,7 +1,7 @@
 // Cost of a step on the inclined-plane scene, per vertex-substep, once the cloth has landed and slides.
 // Run: build/bench/bench_solver --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 // slopeStep: 50x80 at several substeps x iterations, one thread. slopeSize: 50x80 against 256x256 on one and on
-// two threads (substeps 5, iterations 1): the ratios of issue 3 come from one run of this binary.
+// two threads (substeps 5, iterations 1): the size and thread ratios come from one run of this binary.
 #include "slope.hpp"
 
 #include <benchmark/benchmark.h>

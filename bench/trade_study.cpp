@@ -1,4 +1,4 @@
-// Trade study (issue 3, section 1): accuracy against cost of the solver's settings on three scenes with a
+// Trade study: accuracy against cost of the solver's settings on three scenes with a
 // known answer, single thread.
 //
 // Scenes (cloth 21 x 31 vertices, 2 cm spacing, dt 1/60 s; all three share the cloth):

@@ -1,4 +1,4 @@
-# The GPU part of drape (issue 5, DESIGN 9): compute-shader twins of the solver's kernels, run headless through
+# The GPU part of drape (docs/design.md §9): compute-shader twins of the solver's kernels, run headless through
 # OSMesa or EGL. Built where glad (Debian python3-glad) and the EGL headers (libegl-dev) are found; OSMesa and EGL
 # themselves are opened at run time, so a program links neither and says which is missing when it runs.
 #

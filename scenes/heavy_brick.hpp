@@ -1,6 +1,6 @@
 #pragma once
-// The heavy brick of the thesis's Fig 6.4 (issue 4, item 6): a cloth lies on the floor, a kinematic brick comes
-// down on it and presses it to the floor (its bottom `squeeze` thicknesses above the floor, so the cloth under
+// The heavy brick of the cloth-rigid coupling thesis's Fig 6.4: a cloth lies on the floor, a kinematic brick
+// comes down on it and presses it to the floor (its bottom `squeeze` thicknesses above the floor, so the cloth under
 // it is pinched), and then one edge of the cloth is pulled sideways at constant speed so the cloth is drawn out
 // from under the brick against friction on both sides. Shared by samples/heavy_brick and its ctest.
 

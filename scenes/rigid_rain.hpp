@@ -1,5 +1,5 @@
 #pragma once
-// The rigid-body rain of the thesis's Fig 6.6 (issue 4, item 6): a horizontal 50x80 cloth pinned at its four
+// The rigid-body rain of the cloth-rigid coupling thesis's Fig 6.6: a horizontal 50x80 cloth pinned at its four
 // corners half a metre above the floor, and N rigid bodies of random shape (sphere, box, capsule, cylinder,
 // convex hull), size, position, orientation and velocity falling onto it, each coupled two ways with
 // addCoupledBody and stepped with stepCoupled. After `release` seconds the corners are let go and the cloth and

@@ -1,5 +1,5 @@
 #pragma once
-// The inclined-plane scene of paper 002 (Figs 5 and 8): a horizontal cloth above a slope falls, lands and
+// The inclined-plane scene of the SDF collision paper (Figs 5 and 8): a horizontal cloth above a slope falls, lands and
 // slides. Shared by the sample, the tests and the benches, so all three measure the same thing.
 
 #include <drape/drape.hpp>
@@ -39,7 +39,7 @@ struct SlopeResult {
   int vertices = 0, faces = 0;
   double msPerFrame = 0;          ///< median wall time of step() (single thread)
   double nsPerVertexSubstep = 0;
-  double tremblingRms = 0, tremblingMax = 0;  ///< as defined in DESIGN 10
+  double tremblingRms = 0, tremblingMax = 0;  ///< as defined in docs/design.md §10
   double tremblingRmsCentred = 0, tremblingMaxCentred = 0;  ///< with each frame's mean normal velocity removed
   double acceleration = 0;         ///< fitted downhill acceleration of the centre of mass (m/s^2)
   double analyticAcceleration = 0; ///< g (sin - mu cos) when tan > mu, else 0
@@ -116,7 +116,7 @@ SlopeResult runSlopeOn(SolverT& solver, const SlopeConfig& c, const std::functio
   const double g = c.base.gravity.norm();
   const Eigen::Vector3d down = downhill(c.angleDeg);
   const Eigen::Vector3d normal = slopeRotation(c.angleDeg) * Eigen::Vector3d::UnitZ();
-  const Index tracked = (c.ny / 2) * c.nx + c.nx / 2;  // the centre vertex (paper 002, Fig 5)
+  const Index tracked = (c.ny / 2) * c.nx + c.nx / 2;  // the centre vertex (the SDF collision paper's Fig 5)
   const int windowFrame = std::clamp(int(c.windowStart * c.frames), 1, c.frames);
 
   SlopeResult r;

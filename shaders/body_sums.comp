@@ -1,8 +1,9 @@
-// DESIGN 6, phase 2, per body (the CPU twin: the sums in gatherContactForces, include/drape/solver.hpp): one
-// workgroup per coupled body (or per body of a range: a repelling body's pushes alone) adds up, in double, the pushes every vertex passed to it (contact_forces.comp), by
-// kind: direct, exchange (with the sum of |f|^2 / m that shareExchanges weighs) and pinch (with their count).
-// Each invocation sums a fixed stride of vertices and the workgroup then adds the partial sums in a fixed tree,
-// so the result has one order however the GPU schedules it: no atomics.
+// docs/design.md §6, phase 2, per body (the CPU twin: the sums in gatherContactForces, include/drape/solver.hpp): one
+// workgroup per coupled body (or per body of a range: a repelling body's pushes alone) adds up, in double, the pushes
+// every vertex passed to it (contact_forces.comp), by kind: direct, exchange (with the sum of |f|^2 / m that
+// shareExchanges weighs) and pinch (with their count). Each invocation sums a fixed stride of vertices and the
+// workgroup then adds the partial sums in a fixed tree, so the result has one order however the GPU schedules it:
+// no atomics.
 layout(local_size_x = DRAPE_WORKGROUP) in;
 layout(std430, binding = DRAPE_B_PUSHES) readonly buffer Pushes { BodyPush pushes[]; };
 layout(std430, binding = DRAPE_B_BODY_SUMS) writeonly buffer BodySums { BodySum sums[]; };

@@ -1,4 +1,4 @@
-// DESIGN 3 and 4, the face pass (the CPU twins: queryFace and deepestPointOnFace in
+// docs/design.md §3 and §4, the face pass (the CPU twins: queryFace and deepestPointOnFace in
 // include/drape/collision/pgd.hpp, projectFaceContactsAs in include/drape/collision/response.hpp), for one colour
 // of faces: faces of a colour share no vertex, so each invocation moves its own three vertices. Per face: the
 // bounding-sphere cull (phi at the centroid beyond the radius plus the thickness), then Kelley's cutting-plane

@@ -1,11 +1,10 @@
-// DESIGN 4, the vertex pass (the CPU twin: projectVertexContactsAs in include/drape/collision/response.hpp) for
-// one solid: a free vertex closer to the solid than the thickness (by more than the slack) moves out along the
+// docs/design.md §4, the vertex pass (the CPU twin: projectVertexContactsAs in include/drape/collision/response.hpp)
+// for one solid: a free vertex closer to the solid than the thickness (by more than the slack) moves out along the
 // field's gradient to the thickness, and its contact is recorded for the response (recordContact): normal and
-// correction, the solid's velocity at the placed point, its friction (and for a coupled body, the line its push
-// acts on: the placed point). The substep's first pass (fresh) starts
-// every vertex's record, so nothing is cleared. In a settle pass (pass >= 0) the dispatch does nothing unless
-// the pass before found a contact, and a contact found marks this pass's flag: the CPU's loop that stops once a
-// pass finds none, without reading anything back.
+// correction, the solid's velocity at the placed point, its friction (and for a coupled body, the line its push acts
+// on: the placed point). The substep's first pass (fresh) starts every vertex's record, so nothing is cleared. In a
+// settle pass (pass >= 0) the dispatch does nothing unless the pass before found a contact, and a contact found marks
+// this pass's flag: the CPU's loop that stops once a pass finds none, without reading anything back.
 layout(local_size_x = DRAPE_WORKGROUP) in;
 layout(std430, binding = DRAPE_B_POSITIONS) buffer Positions { vec4 x[]; };
 layout(std430, binding = DRAPE_B_CONTACTS) buffer Contacts { Contact contacts[]; };

@@ -1,4 +1,4 @@
-// DESIGN 6, phase 2, per vertex (the CPU twin: gatherContactForces with pinchSupport, unresolvedOverlap,
+// docs/design.md §6, phase 2, per vertex (the CPU twin: gatherContactForces with pinchSupport, unresolvedOverlap,
 // contactPoint, addWrench, addExchange and gatherPropagatedImpulse in include/drape/solver.hpp): what each contact
 // vertex passes to the coupled bodies it touches, by the chosen estimator (sub-force, energy-based, impulse-based),
 // reversed onto the body at the contact's line; each entry is written to the vertex's own BodyPush slots (one per

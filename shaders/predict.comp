@@ -1,5 +1,5 @@
-// DESIGN 1, step 1 (the CPU twin: predictPositions in include/drape/cloth/integrate.hpp): a free vertex (inverse
-// mass w != 0) gains h g of velocity and moves h v; a pinned one stays. The prediction goes to the predicted
+// docs/design.md §1, step 1 (the CPU twin: predictPositions in include/drape/cloth/integrate.hpp): a free vertex
+// (inverse mass w != 0) gains h g of velocity and moves h v; a pinned one stays. The prediction goes to the predicted
 // positions (for the velocity update) and, with the inverse mass in w, to the packed positions the solve
 // works on; with keepStart (a scene with friction) the start positions are kept too. `precise` keeps every
 // product and sum rounded on its own, as the CPU kernel rounds them.

@@ -1,5 +1,5 @@
-// DESIGN 4, propagation (the CPU twin: propagateCorrections in include/drape/collision/response.hpp), one
-// dispatch per ring: a free vertex not in contact gathers from its neighbours in the ring before (ring 1: the
+// docs/design.md §4, propagation (the CPU twin: propagateCorrections in include/drape/collision/response.hpp),
+// one dispatch per ring: a free vertex not in contact gathers from its neighbours in the ring before (ring 1: the
 // contact vertices that gained normal velocity) the mean of their corrections times the weight, along their
 // mean normal, and takes of it only what removes its own approach toward the solid. Each vertex writes only
 // itself, and gathers its neighbours in the asset's order, so the sums are the CPU's.

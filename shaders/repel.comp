@@ -1,10 +1,10 @@
-// Phase 1 of paper 001 (DESIGN 5; the CPU twin: repelVertices in include/drape/collision/response.hpp): every
-// free vertex whose distance beyond the thickness, d = phi - thickness, lies in [0, R) has its velocity blended
-// toward the solid's there, v' = a v + (1 - a) v_solid with a = falloff(d / R): linear (a = t), or smooth
-// (a = 3t^2 - 2t^3). Runs at the start of each substep, before the prediction. For a coupled body's solid
-// (DRAPE_BODY; the CPU twin: gatherRepulsionForces in include/drape/solver.hpp) each vertex also writes the
-// velocity it lost or gained as a push on the body, m dv / h reversed, at its closest point on the body (its
-// first BodyPush; body_sums.comp adds them up).
+// Phase 1 of the cloth-rigid coupling thesis (docs/design.md §5; the CPU twin: repelVertices in
+// include/drape/collision/response.hpp): every free vertex whose distance beyond the thickness, d = phi - thickness,
+// lies in [0, R) has its velocity blended toward the solid's there, v' = a v + (1 - a) v_solid with a = falloff(d / R):
+// linear (a = t), or smooth (a = 3t^2 - 2t^3). Runs at the start of each substep, before the prediction. For a coupled
+// body's solid (DRAPE_BODY; the CPU twin: gatherRepulsionForces in include/drape/solver.hpp) each vertex also writes
+// the velocity it lost or gained as a push on the body, m dv / h reversed, at its closest point on the body (its first
+// BodyPush; body_sums.comp adds them up).
 layout(local_size_x = DRAPE_WORKGROUP) in;
 layout(std430, binding = DRAPE_B_POSITIONS) readonly buffer Positions { vec4 x[]; };
 layout(std430, binding = DRAPE_B_VELOCITIES) buffer Velocities { vec4 v[]; };

@@ -1,4 +1,4 @@
-// DESIGN 4, the velocity split (the CPU twin: respondContacts and applyPositionFriction in
+// docs/design.md §4, the velocity split (the CPU twin: respondContacts and applyPositionFriction in
 // include/drape/collision/response.hpp), per contact vertex and each surface it touches, relative to that solid:
 // an approaching normal velocity is removed, a separating one damped by normalDamping, the tangential one kept
 // minus Coulomb friction with the slot's coefficients. Friction acts on the position (the tangential

@@ -1,6 +1,6 @@
-// DESIGN 6 (the CPU twin: the end of shareExchanges in include/drape/solver.hpp): a body lighter than the vertices
-// pushing it takes only a share s of their exchange, and so do they: each vertex in a body's exchange keeps s of
-// the velocity change the contacts (or propagation) gave it, v = v_pre + s (v - v_pre).
+// docs/design.md §6 (the CPU twin: the end of shareExchanges in include/drape/solver.hpp): a body lighter than the
+// vertices pushing it takes only a share s of their exchange, and so do they: each vertex in a body's exchange
+// keeps s of the velocity change the contacts (or propagation) gave it, v = v_pre + s (v - v_pre).
 layout(local_size_x = DRAPE_WORKGROUP) in;
 layout(std430, binding = DRAPE_B_VELOCITIES) buffer Velocities { vec4 v[]; };
 layout(std430, binding = DRAPE_B_V_PRE) readonly buffer VPre { vec4 vPre[]; };

@@ -1,5 +1,5 @@
-// DESIGN 1, step 2 (the CPU twin: solveDistance in include/drape/constraints/distance.hpp): one colour of
-// distance constraints, one invocation each. A colour's constraints share no vertex, so they run in parallel
+// docs/design.md §1, step 2 (the CPU twin: solveDistance in include/drape/constraints/distance.hpp): one colour
+// of distance constraints, one invocation each. A colour's constraints share no vertex, so they run in parallel
 // and give what the CPU's sequential pass over the colour gives; a dispatch per colour orders the colours.
 // With useLambda the XPBD multiplier is accumulated (several passes over a compliant set); without it the
 // correction is (rest - len) / ((wa + wb + alphaTilde) len), exact for one pass or a rigid set.

@@ -1,5 +1,5 @@
-// DESIGN 1, step 3 (the CPU twin: updateVelocities in include/drape/cloth/integrate.hpp): v += (p - p_predicted)
-// / h, which is (p - x_start) / h without the prediction's rounding in it, and x = p.
+// docs/design.md §1, step 3 (the CPU twin: updateVelocities in include/drape/cloth/integrate.hpp):
+// v += (p - p_predicted) / h, which is (p - x_start) / h without the prediction's rounding in it, and x = p.
 layout(local_size_x = DRAPE_WORKGROUP) in;
 layout(std430, binding = DRAPE_B_POSITIONS) buffer Positions { vec4 x[]; };
 layout(std430, binding = DRAPE_B_VELOCITIES) buffer Velocities { vec4 v[]; };

@@ -1,4 +1,5 @@
-// Two-way coupling (DESIGN 6, paper 000 5.2): the cloth's contact forces act back on dynamic rigid bodies.
+// Two-way coupling (docs/design.md §6; the cloth-rigid coupling thesis, 5.2): the cloth's contact forces act back on
+// dynamic rigid bodies.
 
 #include <drape/drape.hpp>
 #include <drape/rigid/coupled.hpp>

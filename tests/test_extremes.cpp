@@ -1,4 +1,4 @@
-// Issue 3 §3, "stability at the extremes", cases 4, 5, 6 and 8 (tests/test_stability.cpp holds 1, 2, 3, 7 and
+// Stability at the extremes, cases 4, 5, 6 and 8 (tests/test_stability.cpp holds 1, 2, 3, 7 and
 // explains the energy bound: with static solids E = kinetic + gravitational potential never rises above its
 // start except by rounding, or by the contact projection lifting a vertex that starts inside a solid).
 // Every case checks finiteness, energy and speed after every substep and prints one "[stability]" line.

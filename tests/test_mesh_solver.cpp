@@ -1,5 +1,5 @@
 // A grid distance field built from a mesh, used as a solid by the solver: a cloth dropped on a meshed ball
-// rests on it as on the analytic ball of the same radius (DESIGN 2; issue 4, item 1).
+// rests on it as on the analytic ball of the same radius (docs/design.md §2).
 
 #include <drape/drape.hpp>
 

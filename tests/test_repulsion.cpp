@@ -1,5 +1,6 @@
-// Phase 1, the repulsion region (paper 001, eq. 5.4-5.5; DESIGN 5): before contact, a cloth vertex near a solid
-// has its velocity blended toward the solid's, v' = a v + (1 - a) v_c with a = falloff(d / R).
+// Phase 1, the repulsion region (the cloth-rigid coupling thesis, eq. 5.4-5.5; docs/design.md §5): before contact,
+// a cloth vertex near a solid has its velocity blended toward the solid's, v' = a v + (1 - a) v_c with
+// a = falloff(d / R).
 
 #include <drape/drape.hpp>
 
@@ -115,7 +116,7 @@ struct Impact {
   double rmsAcceleration = 0;  ///< m/s^2, over vertices and the steps from the ball's stop to the end
 };
 
-/// The thesis's Fig 6.3 scene in our terms: a 0.8 m cloth pinned at its corners; a ball of radius 0.1 m rises
+/// The thesis's Fig 6.3 scene in drape's terms: a 0.8 m cloth pinned at its corners; a ball of radius 0.1 m rises
 /// into it at `u` for 0.12 s, then stops under it. Same parameters with and without the repulsion region.
 template <class S> Impact impact(double u, double R) {
   const drape::Index n = 41;

@@ -166,7 +166,7 @@ TEST_CASE("bad shapes, masses, inertias and states are rejected, naming what is 
 // --- Narrow phase through libccd against analytic contacts -------------------------------------------------------
 
 TEST_CASE("libccd contacts match analytic depth and normal", "[rigid]") {
-  // libccd's MPR stops when the portal is within 1e-10 m of the surface (we set mpr_tolerance); the manifold's
+  // libccd's MPR stops when the portal is within 1e-10 m of the surface (drape sets mpr_tolerance); the manifold's
   // depths are then recomputed from the supporting features. 1e-8 m and 1e-8 rad leave room for rounding.
   constexpr double kTol = 1e-8;
   bool hit = false;

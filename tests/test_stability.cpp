@@ -1,6 +1,6 @@
 // Long runs at coarse time steps and stiff settings stay finite, bounded and come to rest.
 //
-// Issue 3 §3, "stability at the extremes" (this file: cases 1, 2, 3 and 7; tests/test_extremes.cpp: 4, 5, 6, 8).
+// Stability at the extremes (this file: cases 1, 2, 3 and 7; tests/test_extremes.cpp: 4, 5, 6, 8).
 // Every case runs for seconds of simulated time and checks after every substep that all positions and
 // velocities are finite, that the mechanical energy E = sum m (|v|^2 / 2 - g . x) (kinetic plus gravitational
 // potential) never rises above its starting value by more than a stated tolerance, and that no vertex is faster
@@ -267,7 +267,7 @@ TEMPLATE_TEST_CASE("mass ratio 1:1e6 between neighbours and pinned next to free:
 
 // 3. Extreme substeps: 200 substeps per 1/60 s frame in float (h = 83 us, so a substep's gravity displacement
 //    g h^2 = 6.8e-8 m is about one float ulp at 0.5 m). One substep at dt = 1/60 is the first test of this
-//    file; one substep at dt = 1/30 does not come to rest at HEAD and is kept out (tests/pending_extremes.cpp).
+//    file; one substep at dt = 1/30 does not come to rest and is kept out (tests/pending_extremes.cpp).
 TEST_CASE("200 substeps in float: nothing explodes, precision loss against double measured", "[stability]") {
   drape::Settings s;
   s.subStepCount = 200;

@@ -1,5 +1,5 @@
-// Faces catch solid features thinner than the vertex spacing (DESIGN 3): a rod or a thin box pushed up into
-// a falling cloth, between two rows of vertices. Vertex contacts never see it; face contacts do.
+// Faces catch solid features thinner than the vertex spacing (docs/design.md §3): a rod or a thin box pushed up
+// into a falling cloth, between two rows of vertices. Vertex contacts never see it; face contacts do.
 #include <drape/drape.hpp>
 
 #include <catch2/catch.hpp>

@@ -1,5 +1,5 @@
 #pragma once
-// Metrics of DESIGN 10, with one definition shared by tests, samples and benches.
+// Metrics of docs/design.md §10, with one definition shared by tests, samples and benches.
 
 #include <drape/solver.hpp>
 
@@ -53,7 +53,7 @@ template <class Solver> PenetrationStats penetration(const Solver& solver, int p
   return {std::max(0.0, -minPhi), std::max(0.0, thickness - minPhi)};
 }
 
-/// Trembling (DESIGN 10): the normal component of (x_t - x_{t-1}) / dt_frame over vertices within
+/// Trembling (docs/design.md §10): the normal component of (x_t - x_{t-1}) / dt_frame over vertices within
 /// thickness + margin of a solid in two consecutive frames, accumulated over the frames recorded.
 /// `rms`/`max` are as defined; `rmsCentred` removes each frame's mean normal velocity of the contact set
 /// first, so a cloth that as a whole settles or lifts does not count as trembling.

@@ -8,11 +8,11 @@
 namespace drape {
 
 enum class CollisionMethod {
-  /// Paper 002: after the velocity update, vertex and face contacts (PGD) are projected, each contact vertex's
-  /// velocity relative to the solid is split (normal part attenuated, tangential part kept, Coulomb friction),
-  /// and the normal corrections are propagated to neighbouring vertices.
+  /// The SDF collision paper's method: after the velocity update, vertex and face contacts (PGD) are projected,
+  /// each contact vertex's velocity relative to the solid is split (normal part attenuated, tangential part kept,
+  /// Coulomb friction), and the normal corrections are propagated to neighbouring vertices.
   Improved,
-  /// The "previous method" paper 002 improves on: contacts are projected inside the constraint solve, the
+  /// The "previous method" the SDF collision paper improves on: contacts are projected inside the constraint solve, the
   /// velocity comes from positions, no split, no propagation. Kept to compare against.
   Baseline,
   /// Vertex contacts only, with the split (cheaper; misses features smaller than the spacing).
@@ -28,11 +28,11 @@ inline const char* toString(CollisionMethod m) {
   return "?";
 }
 
-/// How the cloth's push on a dynamic solid is estimated (paper 000, 5.2; DESIGN 6). Each is explicit: per contact,
-/// the force on the particle is reversed onto the body at the contact point, summed into one force and torque
-/// per body and applied in the same substep. The velocity the repulsion region (phase 1) takes from a particle
-/// near a dynamic solid is passed on as an impulse whatever the estimator (the thesis's combination: the
-/// energy estimate has no displacement to work with before contact).
+/// How the cloth's push on a dynamic solid is estimated (the cloth-rigid coupling thesis, 5.2; docs/design.md §6).
+/// Each is explicit: per contact, the force on the particle is reversed onto the body at the contact point, summed
+/// into one force and torque per body and applied in the same substep. The velocity the repulsion region (phase 1)
+/// takes from a particle near a dynamic solid is passed on as an impulse whatever the estimator (the thesis's
+/// combination: the energy estimate has no displacement to work with before contact).
 enum class ContactForce {
   /// (F . n) n of the net force on the particle other than the contact (constraints, gravity) where it presses
   /// into the body: right for a resting load, blind to the particle's own momentum.

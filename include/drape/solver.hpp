@@ -1,5 +1,5 @@
 #pragma once
-// The substep loop (DESIGN 1, paper 002 Algorithm 1):
+// The substep loop (docs/design.md §1; Algorithm 1 of the SDF-based PBD collision paper for cloth-solid interaction):
 //   for each substep: predict, iterationCount constraint passes, velocity update, collide.
 // Solid types are template parameters: a type the scene does not use is an empty array that no loop visits.
 
@@ -370,7 +370,7 @@ template <Scalar S, class... Shapes> class BasicSolver {
     if (coupled_) copyVelocities(vPre_);  // before any contact acts
     if (!baseline) collide(h, thickness);
 
-    // 5. the cloth's push on the coupled bodies, applied before they move (DESIGN 6)
+    // 5. the cloth's push on the coupled bodies, applied before they move (docs/design.md §6)
     if (coupled_) {
       DRAPE_OMP(single)
       {
@@ -438,7 +438,7 @@ template <Scalar S, class... Shapes> class BasicSolver {
     }
   }
 
-  /// Phase 2 (DESIGN 6): for every contact vertex, the force its contacts with each coupled body put on it,
+  /// Phase 2 (docs/design.md §6): for every contact vertex, the force its contacts with each coupled body put on it,
   /// reversed onto that body at the contact point (the vertex moved back by the thickness along the normal).
   /// A vertex's velocity change is one vector however many slots made it, so when all its slots belong to one
   /// body that body gets the whole of it, along the normal of the slot that corrected the vertex most; a vertex

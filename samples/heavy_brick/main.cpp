@@ -1,5 +1,5 @@
-// The heavy-brick sample (the thesis's Fig 6.4, issue 4 item 6): a kinematic brick presses a cloth to the floor
-// and the cloth is drawn out from under it by one edge. Prints a summary to stderr; --json prints one JSON
+// The heavy-brick sample (the cloth-rigid coupling thesis's Fig 6.4): a kinematic brick presses a cloth to the
+// floor and the cloth is drawn out from under it by one edge. Prints a summary to stderr; --json prints one JSON
 // object on stdout and nothing else there.
 
 #include "heavy_brick.hpp"

@@ -1,5 +1,5 @@
-# The paper's Fig 5 from two --trace CSVs of the inclined-plane sample: the tracked (centre) vertex's height above
-# the slope over time, the improved method against the baseline, with the thickness they rest at.
+# The SDF collision paper's Fig 5 from two --trace CSVs of the inclined-plane sample: the tracked (centre) vertex's
+# height above the slope over time, the improved method against the baseline, with the thickness they rest at.
 #   build/samples/inclined_plane --trace improved.csv
 #   build/samples/inclined_plane --method baseline --trace baseline.csv
 #   gnuplot -e "improved='improved.csv'; baseline='baseline.csv'; out='fig5.png'" samples/inclined_plane/fig5.gp

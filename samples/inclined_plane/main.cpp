@@ -1,4 +1,4 @@
-// The inclined-plane sample (paper 002, Figs 5 and 8): a cloth falls onto a slope and slides down it.
+// The inclined-plane sample (the SDF collision paper's Figs 5 and 8): a cloth falls onto a slope and slides down it.
 // Prints a summary to stderr; --json prints one JSON object on stdout and nothing else there. --gpu runs the
 // same scene on the GPU solver (float), and --png DIR draws frames offscreen with the same kind of context and
 // writes them as PNGs (both built where drape::gpu is, DRAPE_SAMPLE_GPU; PNGs through Debian's stb).

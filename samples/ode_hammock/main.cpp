@@ -1,4 +1,4 @@
-// drape coupled to the Open Dynamics Engine (issue 4, item 5; the thesis coupled its cloth to ODE): a cloth
+// drape coupled to the Open Dynamics Engine (the cloth-rigid coupling thesis coupled its cloth to ODE): a cloth
 // hung by its whole border is a hammock, and ODE's bodies (a box, a ball and a capsule) drop into it from a few
 // centimetres. (Hung by its corners only, or dropped from 15-25 cm, the bodies bounce on the springy cloth and
 // a ball rolls about in it freely: whether one left over an edge by 4 s changed with the substep count, so the

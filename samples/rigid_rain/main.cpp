@@ -1,4 +1,4 @@
-// The rigid-body rain sample (the thesis's Fig 6.6, issue 4 item 6): random rigid bodies fall onto a cloth
+// The rigid-body rain sample (the cloth-rigid coupling thesis's Fig 6.6): random rigid bodies fall onto a cloth
 // pinned at its corners, coupled two ways; the corners are let go after --release seconds and everything falls
 // to the floor. Prints a summary to stderr; --json prints one JSON object on stdout and nothing else there.
 // --gpu runs the cloth on the GPU solver (float), and --png DIR draws frames offscreen (cloth, bodies, floor) with

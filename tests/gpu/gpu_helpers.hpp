@@ -1,6 +1,6 @@
 #pragma once
 // What the [gpu] tests share: one context for the process (made on first use; the backend from
-// DRAPE_GPU_BACKEND, which ctest sets to osmesa so CI runs on llvmpipe through OSMesa as issue 5 asks), and
+// DRAPE_GPU_BACKEND, which ctest sets to osmesa so CI runs on llvmpipe through OSMesa), and
 // comparisons of CPU and GPU arrays.
 
 #include <drape/gpu/solver.hpp>

@@ -1,4 +1,4 @@
-// The [gpu] tests' main (issue 5). They need a GL 4.3+ context: without one, the binary says why on stderr and
+// The [gpu] tests' main. They need a GL 4.3+ context: without one, the binary says why on stderr and
 // exits with 77, which ctest reports as "Skipped" (SKIP_RETURN_CODE) rather than as a pass. Listing the tests
 // (ctest's discovery) needs no context. Unlike tests/main.cpp, floating-point exceptions are not trapped here:
 // Mesa's shader compiler and llvmpipe's generated code may raise them in lanes whose results are discarded.

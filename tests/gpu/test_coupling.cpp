@@ -1,4 +1,4 @@
-// Two-way coupling on the GPU (issue 5, DESIGN 6): the contact-force estimates gathered per vertex
+// Two-way coupling on the GPU (docs/design.md §6): the contact-force estimates gathered per vertex
 // (contact_forces.comp), summed per body in a fixed order (body_sums.comp), shared with light bodies (share.comp)
 // and applied to the bodies, against the CPU solver on the coupling's invariants: the total momentum, the energy a
 // light body may not gain, the spin normal forces may not change, a resting box's weight.

@@ -1,4 +1,4 @@
-// The face pass on the GPU (issue 5): the bounding-sphere cull and the cutting-plane search for the deepest
+// The face pass on the GPU: the bounding-sphere cull and the cutting-plane search for the deepest
 // point of each face in a sphere, colour by colour, against the CPU's projectFaceContacts over the same faces in
 // the same order; and a cloth dropped on a ball, GPU against CPU, on its invariants.
 #include "gpu_helpers.hpp"

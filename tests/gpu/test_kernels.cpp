@@ -1,4 +1,4 @@
-// The compute kernels against their CPU twins (issue 5, DESIGN 9), each on the same inputs, and the GPU solver
+// The compute kernels against their CPU twins (docs/design.md §9), each on the same inputs, and the GPU solver
 // against the CPU solver over 1 to 10 substeps and over seconds.
 //
 // Tolerances. Every kernel keeps its arithmetic `precise` and in the CPU kernel's order, so on llvmpipe the two

@@ -1,4 +1,4 @@
-// Several solids on the GPU (issue 5): the records of up to three surfaces per vertex, the placement outside all of
+// Several solids on the GPU: the records of up to three surfaces per vertex, the placement outside all of
 // a vertex's contact planes (settle.comp), the per-surface velocity split then reconciled (respond.comp), each
 // against its CPU twin on random records; and scenes where surfaces meet (a V gutter of two planes, a cloth
 // pinched between a ball and the floor), GPU against CPU.

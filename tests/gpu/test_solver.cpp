@@ -1,4 +1,4 @@
-// The GPU solver against the CPU solver (issue 5): the same hanging cloth, stepped on both, compared vertex by
+// The GPU solver against the CPU solver: the same hanging cloth, stepped on both, compared vertex by
 // vertex over 1 to 10 substeps and on its invariants over seconds; and two GPU runs, bit for bit.
 #include "gpu_helpers.hpp"
 #include "slope.hpp"
@@ -191,7 +191,7 @@ TEST_CASE("EGL and OSMesa contexts give the same bits", "[gpu]") {
   drape::test::gpuContext().makeCurrent();
 }
 
-// --- against a plane: the inclined-plane scene of paper 002 (scenes/slope.hpp) ---------------------------------
+// --- against a plane: the inclined-plane scene of the SDF collision paper (scenes/slope.hpp) --------------------
 
 namespace {
 
@@ -275,7 +275,7 @@ TEST_CASE("the GPU solver rejects bad settings and solids before changing anythi
 
 TEST_CASE("repulsion: a plane rising toward a cloth slows it alike on the GPU and the CPU", "[gpu]") {
   // A horizontal cloth falls toward a floor that rises at 1 m/s into it, with a 5 cm repulsion region: the region
-  // blends the vertices' velocities toward the floor's before contact (DESIGN 5).
+  // blends the vertices' velocities toward the floor's before contact (docs/design.md §5).
   const drape::Falloff falloff = GENERATE(drape::Falloff::Linear, drape::Falloff::Smooth);
   drape::GridDesc grid;
   grid.nx = 25;

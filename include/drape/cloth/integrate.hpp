@@ -1,6 +1,6 @@
 #pragma once
-// The two per-vertex passes around the constraint solve (DESIGN 1, steps 1 and 3): the prediction, which
-// writes the packed positions the solve works on, and the velocity update, which reads them back.
+// The two per-vertex passes around the constraint solve (docs/design.md §1, steps 1 and 3): the prediction,
+// which writes the packed positions the solve works on, and the velocity update, which reads them back.
 
 #include <drape/detail/parallel.hpp>
 #include <drape/math.hpp>

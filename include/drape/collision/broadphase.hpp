@@ -1,6 +1,6 @@
 #pragma once
-// The cloth side of the broad phase, for scenes with many bounded solids (issue 4: many rigid bodies at linear
-// cost per body). The cloth's vertices are binned into a uniform grid (a counting sort), rebuilt when they have
+// The cloth side of the broad phase, for scenes with many bounded solids (many rigid bodies at linear cost per
+// body). The cloth's vertices are binned into a uniform grid (a counting sort), rebuilt when they have
 // moved too far from where they were binned (below). A bounded solid's vertex pass then visits only the
 // vertices in the cells its box meets, grown by the thickness, and its face pass only the faces owned by them
 // (a face is owned by its first vertex, and every point of it lies within the face's reach of that vertex).

@@ -1,6 +1,6 @@
 #pragma once
 // The deepest point of a face in a solid: bounding-sphere culling, and a cutting-plane search over the face's
-// barycentric simplex (in place of the projected gradient descent of paper 002, Fig 1).
+// barycentric simplex (in place of the projected gradient descent of the SDF collision paper, Fig 1).
 
 #include <drape/math.hpp>
 
@@ -63,8 +63,8 @@ template <Scalar S> FaceSphere<S> faceSphere(const Vec3<S>& x0, const Vec3<S>& x
 /// evaluations, and the budget only caps the curved cases (a ball smaller than a face).
 ///
 /// Why the model is cheap to minimise: in barycentric coordinates a cut is linear, c_k . b with c_k its values
-/// at the three corners. We only ever evaluate at the model's minimiser, and the new cut is above the old
-/// model there (or the gap is closed and we stop), so the new minimum lies on the new cut (Seidel's
+/// at the three corners. The search only ever evaluates at the model's minimiser, and the new cut is above the
+/// old model there (or the gap is closed and the search stops), so the new minimum lies on the new cut (Seidel's
 /// incremental LP): clip the triangle to where the new cut is highest and take its lowest vertex. That is
 /// O(cuts) per step, with no LP solver. The cuts are kept (up to kMaxCuts; beyond that, only those active at
 /// the minimum, which keeps it the minimum); evaluating anywhere else, e.g. a damped or Newton step, would
@@ -152,16 +152,15 @@ FaceQuery<S> deepestPointOnFace(const Field& sdf, const Vec3<S>& x0, const Vec3<
   return q;
 }
 
-/// The same search for a field that may not be convex (a grid SDF built from a non-convex mesh), where tangent
-/// planes bound nothing: the projected gradient descent of paper 002 over the barycentric simplex, started from
-/// the centroid. The gradient in barycentric coordinates is g = (n . x0, n . x1, n . x2), taken within the
-/// simplex's plane. The first trial moves one face extent down it, as the cutting-plane search's first step
-/// goes to a corner; after an accepted step the next length is the Barzilai-Borwein one, s.s / s.y (s the
-/// step, y the change of gradient), which is Newton's step on a quadratic; a step that does not lower phi is
-/// halved. It stops when a step moves less than kMinStep in barycentric units (a thousandth of the face), or
-/// after maxIterations evaluations, the centroid's included. It finds a local minimum: where a face crosses a
-/// concave crease, the deeper side can be missed if the centroid's gradient points away from it; the vertex
-/// pass still catches the face's corners.
+/// The same search for a field that may not be convex (a grid SDF built from a non-convex mesh), where tangent planes
+/// bound nothing: the projected gradient descent of the SDF collision paper over the barycentric simplex, started from
+/// the centroid. The gradient in barycentric coordinates is g = (n . x0, n . x1, n . x2), taken within the simplex's
+/// plane. The first trial moves one face extent down it, as the cutting-plane search's first step goes to a corner;
+/// after an accepted step the next length is the Barzilai-Borwein one, s.s / s.y (s the step, y the change of
+/// gradient), which is Newton's step on a quadratic; a step that does not lower phi is halved. It stops when a step
+/// moves less than kMinStep in barycentric units (a thousandth of the face), or after maxIterations evaluations, the
+/// centroid's included. It finds a local minimum: where a face crosses a concave crease, the deeper side can be missed
+/// if the centroid's gradient points away from it; the vertex pass still catches the face's corners.
 template <Scalar S, class Field>
 FaceQuery<S> descendOnFace(const Field& sdf, const Vec3<S>& x0, const Vec3<S>& x1, const Vec3<S>& x2,
                            const Vec3<S>& centroid, S phiC, const Vec3<S>& gradC, int maxIterations) {

@@ -1,5 +1,5 @@
 #pragma once
-// Contact response (DESIGN 4): project vertices and faces to the thickness, split each contact vertex's
+// Contact response (docs/design.md §4): project vertices and faces to the thickness, split each contact vertex's
 // velocity relative to the solid into a normal part (attenuated) and a tangential part (kept, Coulomb
 // friction), and propagate the normal corrections to neighbouring vertices.
 
@@ -178,9 +178,9 @@ struct CollisionStats {
   std::int64_t sdfEvaluations = 0;
 };
 
-/// Phase 1 (paper 001, eq. 5.4): every free vertex whose distance beyond the thickness, d = phi - thickness, lies
-/// in [0, R) has its velocity blended toward the solid's there: v' = a v + (1 - a) v_c, a = falloff(d / R). A
-/// work-shared loop; each vertex writes only its own velocity.
+/// Phase 1 (the cloth-rigid coupling thesis, eq. 5.4): every free vertex whose distance beyond the thickness,
+/// d = phi - thickness, lies in [0, R) has its velocity blended toward the solid's there: v' = a v + (1 - a) v_c,
+/// a = falloff(d / R). A work-shared loop; each vertex writes only its own velocity.
 template <Falloff kFalloff, class Shape, Scalar S>
 void repelVertices(const CompiledSolid<Shape, S>& solid, S thickness, const Vec3<S>* x, Vec3<S>* v,
                    const S* invMass, Index vertexCount) {
@@ -423,7 +423,7 @@ template <Scalar S> bool applyPositionFriction(const ContactSlot<S>& c, Vec3<S>&
   return false;
 }
 
-/// The velocity split of paper 002 (Fig 3) for every contact vertex and each surface it touches, relative
+/// The velocity split of the SDF collision paper (Fig 3) for every contact vertex and each surface it touches, relative
 /// to that solid: the approaching normal velocity is removed, a separating one is damped by normalDamping, the
 /// tangential velocity is kept minus Coulomb friction. Friction acts on positions (applyPositionFriction); a
 /// stuck vertex keeps no tangential velocity, a sliding one loses dynamicFriction * dn / h of its tangential
@@ -507,7 +507,7 @@ template <Scalar S> struct PropagationBuffer {
   bool reachedThisPass(Index j) const { return reach[0][j] >= pass * 16 || reach[1][j] >= pass * 16; }
 };
 
-/// Spreads the contacts' normal velocity corrections to the vertices around them (paper 002): ring r gets
+/// Spreads the contacts' normal velocity corrections to the vertices around them (the SDF collision paper): ring r gets
 /// weight^r of the mean correction of its sources, along their mean normal, and only as much as removes its
 /// own approach toward the solid, so a neighbour is never pushed away (which would make the seam shake).
 /// Each vertex gathers from its neighbours in the ring before (a work-shared loop per ring; the GPU kernel

@@ -1,5 +1,5 @@
 #pragma once
-// A headless OpenGL 4.5 core context for the compute kernels (issue 5, DESIGN 9), made one of two ways:
+// A headless OpenGL 4.5 core context for the compute kernels (docs/design.md §9), made one of two ways:
 // - EGL on its device platform, surfaceless: a hardware device when the machine has one, else Mesa's software
 //   device (llvmpipe);
 // - OSMesa: Mesa's llvmpipe, no GPU and no display needed (the CI path).

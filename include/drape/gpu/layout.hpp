@@ -1,6 +1,6 @@
 #pragma once
-// What the C++ side and the compute shaders must agree on (DESIGN 9), in one place: the workgroup size, the
-// binding of every storage buffer, the location of every uniform, and the layout of every struct a shader
+// What the C++ side and the compute shaders must agree on (docs/design.md §9), in one place: the workgroup
+// size, the binding of every storage buffer, the location of every uniform, and the layout of every struct a shader
 // reads. The shaders never spell a number of their own: each is compiled after preamble(), which turns the
 // constants below into #defines and declares the structs in GLSL, and the static_asserts pin the C++ twins to
 // std430's layout.

@@ -1,5 +1,5 @@
 #pragma once
-// Offscreen pictures of a scene (issue 5, item 6), drawn with the context the kernels run on: the cloth straight
+// Offscreen pictures of a scene, drawn with the context the kernels run on: the cloth straight
 // from the GPU solver's position buffer (or from CPU positions, uploaded), and solids as triangle meshes, flat
 // shaded with a light over the camera's shoulder, both sides of the cloth lit. A frame is read back as RGBA8
 // rows, top row first, for a PNG writer. The mesh shaders are shaders/draw_vert.glsl and draw_frag.glsl.
@@ -45,7 +45,7 @@ class Renderer {
     glNamedFramebufferRenderbuffer(fbo_, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, rbo_[1]);
     if (glCheckNamedFramebufferStatus(fbo_, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
       throw Error("drape::gpu: the picture's framebuffer is incomplete");
-    glCreateVertexArrays(1, &vao_);  // a core context draws only with a vertex array bound (ours has no attributes)
+    glCreateVertexArrays(1, &vao_);  // a core context draws only with a vertex array bound (this one has no attributes)
     program_ = link(std::string(shaders::draw_vert_glsl), std::string(shaders::draw_frag_glsl));
   }
   Renderer(const Renderer&) = delete;

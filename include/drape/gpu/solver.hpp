@@ -1,5 +1,5 @@
 #pragma once
-// The cloth solver on the GPU (issue 5, DESIGN 9): the CPU solver's substep loop, each kernel a compute
+// The cloth solver on the GPU (docs/design.md §9): the CPU solver's substep loop, each kernel a compute
 // dispatch on buffers that stay on the GPU. The state is uploaded once, stepped many times, and read back on
 // demand (position(), velocity(), state()): nothing crosses the bus between steps unless asked.
 //
@@ -531,9 +531,9 @@ class Solver {
                              GLsizeiptr(std::size_t(vertexCount()) * sizeof(layout::Vertex)));
   }
 
-  /// Phase 2 (DESIGN 6, gatherContactForces): the pushes of every vertex (contact_forces.comp), summed per body
-  /// in double (body_sums.comp); the sums (192 bytes a body) are read back, each body's exchange shared with the
-  /// vertices that made it (shareExchanges: share.comp scales those vertices' changes where a body took less
+  /// Phase 2 (docs/design.md §6, gatherContactForces): the pushes of every vertex (contact_forces.comp), summed
+  /// per body in double (body_sums.comp); the sums (192 bytes a body) are read back, each body's exchange shared
+  /// with the vertices that made it (shareExchanges: share.comp scales those vertices' changes where a body took less
   /// than all), and the forces applied to the bodies before they move.
   void gatherContactForces(float h) {
     const auto n = unsigned(vertexCount());
@@ -758,14 +758,14 @@ class Solver {
     update_.set(layout::kInverseStep, 1.0f / h);
     update_.dispatch(n);
 
-    // 4. collide (DESIGN 3, 4): per solid, project vertices, then faces; where surfaces meet, settle; split;
-    //    propagate (collide on the CPU). The baseline method collided inside the solve instead.
+    // 4. collide (docs/design.md §3, §4): per solid, project vertices, then faces; where surfaces meet, settle;
+    //    split; propagate (collide on the CPU). The baseline method collided inside the solve instead.
     if (coupled_) copyVelocities(vPre_);  // before any contact acts
     if (!passes_.empty() && !baseline) {
       projectAll(true);
       respondAndPropagate(h);
     }
-    // 5. the cloth's push on the coupled bodies, applied before they move (DESIGN 6)
+    // 5. the cloth's push on the coupled bodies, applied before they move (docs/design.md §6)
     if (coupled_) gatherContactForces(h);
   }
 

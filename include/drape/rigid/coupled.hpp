@@ -1,6 +1,6 @@
 #pragma once
-// Two-way coupling between a cloth solver and drape's own rigid bodies (DESIGN 6, 7): a dynamic solid per body,
-// and a step that interleaves the two solvers substep by substep, so the forces the cloth estimates in a
+// Two-way coupling between a cloth solver and drape's own rigid bodies (docs/design.md §6, §7): a dynamic solid
+// per body, and a step that interleaves the two solvers substep by substep, so the forces the cloth estimates in a
 // substep act on the bodies in that same substep.
 
 #include <drape/rigid/world.hpp>

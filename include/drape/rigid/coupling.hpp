@@ -4,9 +4,9 @@
 // bodies in a small class implementing it and hands those to the cloth solver instead.
 //
 // Per substep the cloth solver calls, for each coupled body (never per vertex): pose(), linearVelocity(),
-// angularVelocity() to place and move the body's solid; then, for the contacts it resolved, applyForceAtPoint()
-// with the reaction forces (thesis chapter 5.2: the force on the particle, reversed). The engine integrates
-// the accumulated force and torque in its next (sub)step and clears them. inverseMass() and
+// angularVelocity() to place and move the body's solid; then, for the contacts it resolved, applyForceAtPoint() with
+// the reaction forces (the cloth-rigid coupling thesis, 5.2: the force on the particle, reversed). The engine
+// integrates the accumulated force and torque in its next (sub)step and clears them. inverseMass() and
 // inverseInertiaWorld() let a solver weigh a contact between cloth and body (0 for a kinematic body).
 
 #include <drape/math.hpp>

@@ -1,5 +1,5 @@
 #pragma once
-// A world of rigid bodies stepped in substeps, like the cloth (DESIGN.md sections 1 and 7). Needs libccd
+// A world of rigid bodies stepped in substeps, like the cloth (docs/design.md §1 and §7). Needs libccd
 // (link drape::rigid).
 //
 // Contacts are resolved with extended position-based dynamics (XPBD) for rigid bodies, after Mueller et al.
@@ -7,7 +7,7 @@
 // non-penetration, then a velocity pass for restitution and friction. It is the same substep loop as the
 // cloth's, so the cloth solver can interleave the two substep by substep, and with small substeps it keeps
 // resting contact and stacks still without warm starting or many iterations, which sequential impulses need.
-// Where we depart from the paper (friction, steps 5 and 6), step 6 says why (measured while building this).
+// Where drape departs from that paper (friction, steps 5 and 6), step 6 gives the measured reason.
 //
 // Each substep, in this order:
 //   1. integrate: v += h (g + F / m); w by Euler's equations (body frame, implicit midpoint: a torque-free body

@@ -1,9 +1,9 @@
 #pragma once
-// Grid distance fields built from closed triangle meshes: the "distance field volume texture" of the thesis
-// (paper 000, step 1). A regular grid is built once around the mesh, each node holding the exact signed
-// distance to the mesh and the unit normal (the gradient of the exact field there); a query interpolates both
-// trilinearly. Outside the grid's box the field continues as sqrt(box distance^2 + boundary value^2), a lower
-// bound of the true distance that grows outward and keeps the field 1-Lipschitz across the box (a plain sum
+// Grid distance fields built from closed triangle meshes: the "distance field volume texture" of the cloth-rigid
+// coupling thesis (step 1 of its algorithm). A regular grid is built once around the mesh, each node holding the exact
+// signed distance to the mesh and the unit normal (the gradient of the exact field there); a query interpolates both
+// trilinearly. Outside the grid's box the field continues as sqrt(box distance^2 + boundary value^2), a lower bound of
+// the true distance that grows outward and keeps the field 1-Lipschitz across the box (a plain sum
 // "box distance + boundary value" would be an upper bound and only sqrt(2)-Lipschitz).
 //
 // What holds for the sampled field (tests/test_mesh_sdf.cpp measures each):

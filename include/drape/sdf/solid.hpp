@@ -15,22 +15,22 @@ namespace drape {
 enum class Motion {
   Static,     ///< never moves; its velocity must be zero
   Kinematic,  ///< moved by its given velocities every substep, unaffected by the cloth
-  /// A rigid body the cloth pushes back (DESIGN 6, 7): its pose and velocities are read from `body` every
-  /// substep (the solid's own are ignored), and the contact forces are applied to it.
+  /// A rigid body the cloth pushes back (docs/design.md §6, §7): its pose and velocities are read from `body`
+  /// every substep (the solid's own are ignored), and the contact forces are applied to it.
   Dynamic,
 };
 
-/// How the blend weight of the repulsion region falls off with distance (paper 001, eq. 5.5 and the polynomial
-/// it mentions): a(t) with t = d / R, 0 at contact and 1 at the region's edge.
+/// How the blend weight of the repulsion region falls off with distance (the cloth-rigid coupling thesis, eq. 5.5
+/// and the polynomial it mentions): a(t) with t = d / R, 0 at contact and 1 at the region's edge.
 enum class Falloff {
   Linear,  ///< a = t
   Smooth,  ///< a = 3t^2 - 2t^3: no kink at either end, so the blend starts and ends gently
 };
 
-/// Phase 1 of paper 001 (DESIGN 5): a cloth vertex within `radius` of the solid's contact shell (0 <= phi -
-/// thickness < radius) has its velocity blended toward the solid's velocity at that point before each
-/// substep's prediction, v' = a v + (1 - a) v_c. Off (radius 0) by default; a scene with no repulsive solid
-/// runs no repulsion loop. The whole velocity is blended, as in the paper: near a solid it also slows
+/// Phase 1 of the cloth-rigid coupling thesis (docs/design.md §5): a cloth vertex within `radius` of the solid's
+/// contact shell (0 <= phi - thickness < radius) has its velocity blended toward the solid's velocity at that
+/// point before each substep's prediction, v' = a v + (1 - a) v_c. Off (radius 0) by default; a scene with no
+/// repulsive solid runs no repulsion loop. The whole velocity is blended, as in the thesis: near a solid it also slows
 /// sliding, like a cushion of air.
 struct Repulsion {
   double radius = 0;  ///< m beyond the thickness; 0 turns it off
@@ -60,7 +60,7 @@ template <Scalar S> struct SolidMotion {
   S dynamicFriction;
   std::int32_t body = -1;  ///< index of the solver's coupled body this solid pushes; -1 for none
 
-  /// v_c(x) = v_r + w x (x - x_r): the velocity of the solid's material point at x (thesis eq. 5.4).
+  /// v_c(x) = v_r + w x (x - x_r): the velocity of the solid's material point at x (the thesis, eq. 5.4).
   DRAPE_ALWAYS_INLINE Vec3<S> velocityAt(const Vec3<S>& x) const {
     // Written out: in every contact record, where GCC would otherwise call Eigen's cross product out of line.
     const Vec3<S> d = x - centre;
