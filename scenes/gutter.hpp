@@ -1,12 +1,14 @@
 #pragma once
 // A cloth folded into a V gutter of two frictionless planes (walls at `wallDeg` from horizontal), laid in
 // 1 mm above the thickness and left to settle. The fold line touches both walls at once: this is where the
-// baseline (contacts inside the solve) keeps trembling and the improved method settles (paper 002's claim).
+// baseline (contacts inside the solve) keeps trembling and the improved method settles (the SDF collision paper's claim, docs/design.md §4).
 
 #include <drape/drape.hpp>
 
+#include <cmath>
 #include <memory>
 #include <numbers>
+#include <vector>
 
 namespace drape::scenes {
 
@@ -29,7 +31,8 @@ struct GutterResult {
   double maxSpeed = 0;  ///< m/s over the window
 };
 
-template <Scalar S> GutterResult runGutter(const GutterConfig& c) {
+/// The solver with the two walls and the cloth folded into the V.
+template <Scalar S> Solver<S> makeGutter(const GutterConfig& c) {
   GridDesc grid;
   grid.nx = c.nx;
   grid.ny = c.ny;
@@ -51,6 +54,11 @@ template <Scalar S> GutterResult runGutter(const GutterConfig& c) {
       x[j * c.nx + i] = {u * std::cos(wall), y, std::abs(u) * std::sin(wall) + lift};
     }
   solver.setPositions(x);
+  return solver;
+}
+
+template <Scalar S> GutterResult runGutter(const GutterConfig& c) {
+  Solver<S> solver = makeGutter<S>(c);
   GutterResult r;
   TrembleMeter meter;
   meter.frame(solver, c.dt, false);
