@@ -1,7 +1,8 @@
 #pragma once
 // A cloth folded into a V gutter of two frictionless planes (walls at `wallDeg` from horizontal), laid in
 // 1 mm above the thickness and left to settle. The fold line touches both walls at once: this is where the
-// baseline (contacts inside the solve) keeps trembling and the improved method settles (the SDF collision paper's claim, docs/design.md §4).
+// baseline (contacts inside the solve) keeps trembling and the improved method settles (the SDF collision
+// paper's claim, docs/design.md §4).
 
 #include <drape/drape.hpp>
 
