@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
@@ -43,6 +44,13 @@ namespace detail {
 /// Eigen's allFinite() computes x - x, which raises FE_INVALID on infinity; this asks each coefficient.
 template <class Derived> bool allFinite(const Eigen::MatrixBase<Derived>& m) { return m.array().isFinite().all(); }
 
+/// A number as a message shows it: six significant digits, so 1e-10 reads as 1e-10 rather than 0.000000.
+inline std::string formatNumber(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.6g", value);
+  return text;
+}
+
 inline void require(bool ok, const std::string& what) {
   if (!ok) throw Error("drape: " + what);
 }
@@ -60,13 +68,13 @@ inline void require(bool ok, Message&& what) {
 }
 
 inline void requireFinite(double value, const std::string& name) {
-  require(std::isfinite(value), name + " must be finite (got " + std::to_string(value) + ")");
+  require(std::isfinite(value), name + " must be finite (got " + formatNumber(value) + ")");
 }
 
 inline void requireRange(double value, double lo, double hi, const std::string& name) {
   require(std::isfinite(value) && value >= lo && value <= hi,
-          name + " must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "] (got " +
-              std::to_string(value) + ")");
+          name + " must be in [" + formatNumber(lo) + ", " + formatNumber(hi) + "] (got " + formatNumber(value) +
+              ")");
 }
 
 }  // namespace detail

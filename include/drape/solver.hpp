@@ -11,6 +11,7 @@
 #include <drape/collision/response.hpp>
 #include <drape/constraints/distance.hpp>
 #include <drape/detail/parallel.hpp>
+#include <drape/front_end.hpp>
 #include <drape/sdf/grid.hpp>
 #include <drape/sdf/solid.hpp>
 #include <drape/settings.hpp>
@@ -26,24 +27,18 @@
 
 namespace drape {
 
-/// A kinematic attachment of a vertex to a world point.
-struct Pin {
-  Index vertex;
-  Eigen::Vector3d target;  ///< world (m)
-};
+template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<BasicSolver<S, Shapes...>, S, Shapes...> {
+  using Front = SolverFront<BasicSolver<S, Shapes...>, S, Shapes...>;
+  friend Front;
 
-template <Scalar S, class... Shapes> class BasicSolver {
  public:
-  using scalar_type = S;
-  /// Whether this solver takes solids of that shape type.
-  template <class Shape> static constexpr bool kHasShape = (std::is_same_v<Shape, Shapes> || ...);
+  using Front::solidCount;
+  using Front::vertexCount;
 
   /// asset: shared topology; areaDensity: kg/m^2, giving each vertex a third of its faces' mass.
   explicit BasicSolver(std::shared_ptr<const ClothAsset<S>> asset, const Settings& settings = {},
                        double areaDensity = 0.1)
-      : asset_((detail::require(asset != nullptr, "the cloth asset is null"), std::move(asset))),
-        settings_((settings.validate(), settings)),
-        state_(ClothState<S>::fromAsset(*asset_, areaDensity)) {
+      : Front(std::move(asset), settings, areaDensity) {
     const Index n = asset_->vertexCount();
     xPrev_.resize(n);
     xPredicted_.resize(n);
@@ -62,165 +57,41 @@ template <Scalar S, class... Shapes> class BasicSolver {
     grid_.setTopology(asset_->triangles, n, S(2 * std::max(meanEdge, 1e-6)));
   }
 
-  // --- settings -------------------------------------------------------------------------------------------
-  const Settings& settings() const { return settings_; }
-  void setSettings(const Settings& s) {
-    s.validate();
-    settings_ = s;
-  }
-
-  // --- cloth ----------------------------------------------------------------------------------------------
-  const ClothAsset<S>& asset() const { return *asset_; }
-  const ClothState<S>& state() const { return state_; }
-  Index vertexCount() const { return asset_->vertexCount(); }
-  Eigen::Vector3d position(Index i) const { return state_.origin + state_.x[checkVertex(i)].template cast<double>(); }
-  Eigen::Vector3d velocity(Index i) const { return state_.v[checkVertex(i)].template cast<double>(); }
-
-  /// Replaces all positions (world, m). Rejects a wrong count or a non-finite value before changing anything.
-  void setPositions(const std::vector<Eigen::Vector3d>& world) {
-    detail::require(Index(world.size()) == vertexCount(),
-                    "setPositions got " + std::to_string(world.size()) + " positions for " +
-                        std::to_string(vertexCount()) + " vertices");
-    for (std::size_t i = 0; i < world.size(); ++i)
-      detail::require(detail::allFinite(world[i]) && world[i].cwiseAbs().maxCoeff() <= kMaxCoordinate,
-                      "position of vertex " + std::to_string(i) + " is not finite or lies beyond 1e9 m");
-    // The local origin moves to the new positions, so float keeps its precision wherever they are.
-    Eigen::Vector3d centre = Eigen::Vector3d::Zero();
-    for (const auto& p : world) centre += p / double(world.size());
-    const Eigen::Vector3d origin = snapOrigin(centre);
-    for (std::size_t i = 0; i < world.size(); ++i)
-      detail::require((world[i] - origin).cwiseAbs().maxCoeff() <= kMaxDistance,
-                      "position of vertex " + std::to_string(i) + " lies more than 1e5 m from the cloth's centre");
-    state_.origin = origin;
-    gridFresh_ = false;  // the grid's binned positions are not these
-    for (std::size_t i = 0; i < world.size(); ++i) state_.x[i] = (world[i] - origin).template cast<S>();
-  }
-  /// Replaces all velocities (m/s), with the same checks.
-  void setVelocities(const std::vector<Eigen::Vector3d>& v) {
-    detail::require(Index(v.size()) == vertexCount(), "setVelocities got " + std::to_string(v.size()) +
-                                                          " velocities for " + std::to_string(vertexCount()) +
-                                                          " vertices");
-    for (std::size_t i = 0; i < v.size(); ++i)
-      detail::require(detail::allFinite(v[i]) && v[i].cwiseAbs().maxCoeff() <= kMaxSpeed,
-                      "velocity of vertex " + std::to_string(i) + " is not finite or has a component beyond 1e5 m/s");
-    for (std::size_t i = 0; i < v.size(); ++i) state_.v[i] = v[i].template cast<S>();
-  }
-  /// Sets one vertex's inverse mass (1/kg); 0 pins it where it is.
-  void setInverseMass(Index i, double invMass) {
-    checkVertex(i);
-    constexpr double kLargest = double(std::numeric_limits<S>::max()), kSmallest = double(std::numeric_limits<S>::min());
-    detail::require(std::isfinite(invMass) && (invMass == 0 || (invMass >= kSmallest && invMass <= kLargest)),
-                    "inverse mass of vertex " + std::to_string(i) +
-                        " must be finite, >= 0 and representable in the solver's scalar (got " +
-                        std::to_string(invMass) + ")");
-    state_.invMass[i] = S(invMass);
-    if (invMass == 0) state_.v[i].setZero();
-    massesChanged_ = true;  // the lane copies are gathered again before the next substep
-  }
-  /// Fixes a vertex where it is (inverse mass 0).
-  void pin(Index i) { setInverseMass(i, 0); }
-  /// Attaches a vertex to a world target; with pinCompliance 0 and inverse mass 0 it follows the target
-  /// exactly, otherwise it is pulled by a zero-length XPBD constraint. Returns the pin's index.
-  Index attach(Index i, const Eigen::Vector3d& target) {
-    checkVertex(i);
-    detail::require(detail::allFinite(target), "pin target of vertex " + std::to_string(i) + " is not finite");
-    pins_.push_back({i, target});
-    pinLocal_.push_back({i, Vec3<S>::Zero()});
-    lambdaPins_.push_back(0);
-    return Index(pins_.size()) - 1;
-  }
-  void setPinTarget(Index pin, const Eigen::Vector3d& target) {
-    detail::require(pin >= 0 && pin < Index(pins_.size()), "pin index " + std::to_string(pin) + " out of range");
-    detail::require(detail::allFinite(target), "pin target is not finite");
-    pins_[pin].target = target;
-  }
-  const std::vector<Pin>& pins() const { return pins_; }
-
-  // --- solids ---------------------------------------------------------------------------------------------
-  template <class Shape> Index addSolid(const Solid<Shape>& solid) {
-    static_assert((std::is_same_v<Shape, Shapes> || ...), "this solver was not declared with that shape type");
-    detail::validateSolid(solid, "solid");
-    auto& list = std::get<std::vector<Solid<Shape>>>(solids_);
-    list.push_back(solid);
-    std::get<std::vector<CompiledSolid<Shape, S>>>(compiled_).resize(list.size());
-    return Index(list.size()) - 1;
-  }
-  template <class Shape> const Solid<Shape>& solid(Index k) const {
-    const auto& list = std::get<std::vector<Solid<Shape>>>(solids_);
-    detail::require(k >= 0 && k < Index(list.size()), "solid index " + std::to_string(k) + " out of range");
-    return list[k];
-  }
-  template <class Shape> void setSolid(Index k, const Solid<Shape>& s) {
-    auto& list = std::get<std::vector<Solid<Shape>>>(solids_);
-    detail::require(k >= 0 && k < Index(list.size()), "solid index " + std::to_string(k) + " out of range");
-    detail::validateSolid(s, "solid " + std::to_string(k));
-    list[k] = s;
-    // The shape may differ: nothing of the old compilation is kept.
-    std::get<std::vector<CompiledSolid<Shape, S>>>(compiled_)[k] = detail::compileSolid<Shape, S>(s, state_.origin);
-  }
-  /// Calls f(const CompiledSolid<Shape, S>&) for every solid, compiled at the current local origin.
-  template <class F> void forEachSolid(F&& f) const {
-    std::apply(
-        [&](const auto&... lists) {
-          (
-              [&](const auto& list) {
-                for (const auto& s : list) f(detail::compileSolid<std::decay_t<decltype(s.shape)>, S>(s, state_.origin));
-              }(lists),
-              ...);
-        },
-        solids_);
-  }
-
-  // --- stepping -------------------------------------------------------------------------------------------
-  /// Advances by dt seconds in subStepCount substeps.
-  void step(double dt) {
-    step(dt, [](const BasicSolver&) {});
-  }
-  /// The same, calling onSubStep(solver) after every substep (for metrics and tests).
-  template <class Observer> void step(double dt, Observer&& onSubStep) {
-    detail::require(std::isfinite(dt) && dt > 0 && dt <= 10,
-                    [&] { return "step dt must be in (0, 10] s (got " + std::to_string(dt) + ")"; });
-    detail::require(dt / settings_.subStepCount >= kMinSubStep, [&] {
-      return "step dt / subStepCount must be at least 1e-6 s (got " + std::to_string(dt / settings_.subStepCount) + ")";
-    });
-    rebase();
-    const double h = dt / settings_.subStepCount;
-    for (int sub = 0; sub < settings_.subStepCount; ++sub) {
-      subStep(h);
-      onSubStep(std::as_const(*this));
-    }
-  }
-
-  /// The force and torque (about the body's centre of mass) the cloth applied to each coupled body in the last
-  /// substep, in the order the dynamic solids were visited (shape type by shape type, then by index).
-  const std::vector<Eigen::Vector3d>& bodyForces() const { return bodyForce_; }
-  const std::vector<Eigen::Vector3d>& bodyTorques() const { return bodyTorque_; }
-
   /// Collision work of the last substep.
   const CollisionStats& stats() const { return stats_; }
   /// Contact records of the last substep (improved and vertex methods).
   const ContactBuffer<S>& contacts() const { return contacts_; }
 
  private:
-  Index checkVertex(Index i) const {
-    detail::require(i >= 0 && i < vertexCount(), "vertex index " + std::to_string(i) + " out of range [0, " +
-                                                     std::to_string(vertexCount()) + ")");
-    return i;
-  }
+  using Front::asset_;
+  using Front::bodies_;
+  using Front::bodyCentre_;
+  using Front::bodyForce_;
+  using Front::bodyTorque_;
+  using Front::compiled_;
+  using Front::pins_;
+  using Front::settings_;
+  using Front::state_;
 
-  /// Local origins sit on a 1/64 m lattice, so shifting float positions by their difference is exact.
-  static Eigen::Vector3d snapOrigin(const Eigen::Vector3d& p) { return (p * 64.0).array().round().matrix() / 64.0; }
+  // --- the front end's hooks (SolverFront) ------------------------------------------------------------------
+  void loadState() const {}
+  void storeState(StateChange change) {
+    if (change == StateChange::Positions) gridFresh_ = false;  // the grid's binned positions are not these
+    if (change == StateChange::Masses) massesChanged_ = true;  // the lane copies are gathered again
+  }
+  static void checkSettings(const Settings&) {}  // the CPU runs every valid setting
+  template <class Shape> static void checkSolid(const Solid<Shape>&) {}
+  template <class Shape> void solidSet(Index) {}
 
   /// Moves the local origin to follow the cloth, in steps of 1/64 m so the shift is exact in float.
-  void rebase() {
+  void beginStep() {
     Eigen::Vector3d centre = Eigen::Vector3d::Zero();
     for (const auto& p : state_.x) centre += p.template cast<double>();
     centre /= double(state_.x.size());
-    if (centre.norm() < kRebaseDistance) return;
-    const Eigen::Vector3d shift = snapOrigin(centre);
+    const Eigen::Vector3d shift = this->moveOrigin(centre);
+    if (shift.isZero(0)) return;
     const Vec3<S> shiftS = shift.cast<S>();
     for (auto& p : state_.x) p -= shiftS;
-    state_.origin += shift;
     gridFresh_ = false;
   }
 
@@ -229,43 +100,18 @@ template <Scalar S, class... Shapes> class BasicSolver {
   }
 
   void prepareSolids(double h) {
-    hasFriction_ = false;
-    repulsive_ = false;
-    bodies_.clear();
-    bodyCentre_.clear();
-    reconcile_ = solidCount() > 1;
-    int bounded = 0;
-    std::apply(
-        [&](auto&... lists) {
-          (
-              [&](auto& list) {
-                using Shape = std::decay_t<decltype(list[0].shape)>;
-                auto& out = std::get<std::vector<CompiledSolid<Shape, S>>>(compiled_);
-                for (std::size_t k = 0; k < list.size(); ++k) {
-                  hasFriction_ = hasFriction_ || list[k].staticFriction > 0 || list[k].dynamicFriction > 0;
-                  repulsive_ = repulsive_ || list[k].repulsion.radius > 0;
-                  reconcile_ = reconcile_ || !Sdf<Shape, S>::kLinear;
-                  detail::advancePose(list[k], h);
-                  detail::recompileSolid<Shape, S>(out[k], list[k], state_.origin);
-                  bounded += out[k].bounded ? 1 : 0;
-                  if (list[k].motion == Motion::Dynamic) {
-                    out[k].motion.body = std::int32_t(bodies_.size());
-                    bodies_.push_back(list[k].body);
-                    bodyCentre_.push_back(list[k].pose.position);  // the field's centre, not the body's now
-                  }
-                }
-              }(lists),
-              ...);
-        },
-        solids_);
+    const SolidFeatures has = Front::prepareSolids(h, [](const auto&, const auto&) {});
+    hasFriction_ = has.friction;
+    repulsive_ = has.repulsion;
+    reconcile_ = has.reconcile;
+    coupled_ = has.coupled;
+    pinLocal_.resize(pins_.size());
+    lambdaPins_.resize(pins_.size());
     for (std::size_t k = 0; k < pins_.size(); ++k)
-      pinLocal_[k].target = (pins_[k].target - state_.origin).template cast<S>();
-    gridded_ = settings_.broadPhase && bounded > 0;
+      pinLocal_[k] = {pins_[k].vertex, (pins_[k].target - state_.origin).template cast<S>()};
+    gridded_ = settings_.broadPhase && has.bounded > 0;
     gridFresh_ = gridFresh_ && gridded_;  // a grid not kept up in a substep without it is built anew
     moveBound_ = 0;
-    coupled_ = !bodies_.empty();
-    bodyForce_.assign(bodies_.size(), Eigen::Vector3d::Zero());
-    bodyTorque_.assign(bodies_.size(), Eigen::Vector3d::Zero());
     contacts_.keepLines(coupled_);
     if (coupled_ && vStart_.size() != state_.v.size()) {
       vStart_.resize(state_.v.size());
@@ -688,7 +534,7 @@ template <Scalar S, class... Shapes> class BasicSolver {
         if (gridded_ && solid.bounded) {
           DRAPE_OMP(single)
           {
-            if (grid_.stale()) grid_.build(x, asset_->triangles);
+            if (grid_.stale()) grid_.build(x, this->asset_->triangles);
             grid_.vertices(x, solid.boxLow, solid.boxHigh, thickness, nearVertices_);
           }
           projectVertexContacts(solid, thickness, x, w, ItemList{nearVertices_.data()}, Index(nearVertices_.size()),
@@ -700,7 +546,7 @@ template <Scalar S, class... Shapes> class BasicSolver {
             if constexpr (kFacePass) {
               grid_.faces(x, solid.boxLow, solid.boxHigh, thickness, nearFaces_);
               grid_.noteDrift(projectFaceContacts<kCull, true>(
-                  solid, thickness, settings_.pgdIterations, asset_->triangles, ItemList{nearFaces_.data()},
+                  solid, thickness, this->settings_.pgdIterations, this->asset_->triangles, ItemList{nearFaces_.data()},
                   Index(nearFaces_.size()), x, w, contacts_, stats_, grid_.binned()));
             }
           }
@@ -711,8 +557,8 @@ template <Scalar S, class... Shapes> class BasicSolver {
           if constexpr (kFacePass) {
             DRAPE_OMP(single)
             {
-              const S moved = projectFaceContacts<kCull>(solid, thickness, settings_.pgdIterations, asset_->triangles,
-                                                         AllItems{}, Index(asset_->triangles.size()), x, w, contacts_,
+              const S moved = projectFaceContacts<kCull>(solid, thickness, this->settings_.pgdIterations, this->asset_->triangles,
+                                                         AllItems{}, Index(this->asset_->triangles.size()), x, w, contacts_,
                                                          stats_, binned);
               if (gridded_) grid_.noteDrift(moved);
             }
@@ -778,10 +624,6 @@ template <Scalar S, class... Shapes> class BasicSolver {
     }
   }
 
-  Index solidCount() const {
-    return std::apply([](const auto&... lists) { return Index((lists.size() + ... + 0)); }, solids_);
-  }
-
   /// The "previous method": the same vertex and face contacts, projected inside the solve pass, with
   /// position-level friction; the velocity update then turns every projection into velocity.
   void collideBaseline(S h, S thickness) {
@@ -804,20 +646,10 @@ template <Scalar S, class... Shapes> class BasicSolver {
                            settings_.propagationRings);
   }
 
-  static constexpr double kRebaseDistance = 0.5;  ///< m the cloth may drift from its local origin
-  static constexpr double kMaxDistance = 1e5;     ///< m, largest accepted offset from the local origin
-  static constexpr double kMaxCoordinate = 1e9;   ///< m, largest accepted world coordinate
-  static constexpr double kMaxSpeed = 1e5;        ///< m/s, largest accepted vertex speed
-  static constexpr double kMinSubStep = 1e-6;     ///< s, below this h^2 underflows float
+
   static constexpr int kSettlePasses = 4;         ///< extra vertex passes where solids meet
   static constexpr double kPinchRate = 0.2;       ///< share of a pinch's overlap its support undoes per substep
 
-  std::shared_ptr<const ClothAsset<S>> asset_;
-  Settings settings_;
-  ClothState<S> state_;
-  std::tuple<std::vector<Solid<Shapes>>...> solids_;
-  std::tuple<std::vector<CompiledSolid<Shapes, S>>...> compiled_;
-  std::vector<Pin> pins_;
   std::vector<PinTarget<S>> pinLocal_;
   std::vector<Vec3<S>> xPrev_, xPredicted_;
   std::vector<Vec4<S>> packed_;   ///< (position, 0) of each vertex: what the constraint solve works on
@@ -836,12 +668,6 @@ template <Scalar S, class... Shapes> class BasicSolver {
   ClothGrid<S> grid_;
   std::vector<Index> nearVertices_, nearFaces_;  ///< what the grid found near the current solid
   S moveBound_ = 0;  ///< the passes' largest vertex moves, summed (shared by the team)
-  std::vector<CoupledBody*> bodies_;                    ///< the dynamic solids' bodies, this substep
-  /// Their centres of mass where the substep's contacts were found (advancePose: the start, carried by the
-  /// velocity over the substep); torques are taken about them, so a force along a field's normal through a
-  /// ball's centre has no moment.
-  std::vector<Eigen::Vector3d> bodyCentre_;
-  std::vector<Eigen::Vector3d> bodyForce_, bodyTorque_;  ///< what the cloth passed to each, this substep
   std::vector<Vec3<S>> vStart_, vPre_;                  ///< velocities at the substep's start, before contacts
   /// A body's exchange with the vertices whose contacts are all with it, this substep (shareExchanges).
   struct Exchange {
@@ -860,6 +686,15 @@ template <Scalar S, class... Shapes> class BasicSolver {
 
 /// The solver with every built-in shape: the analytic ones, the rigid bodies' cylinders and convex hulls, and
 /// grid distance fields from meshes.
-template <Scalar S> using Solver = BasicSolver<S, Plane, Sphere, Box, Capsule, Cylinder, ConvexHull, MeshShape>;
+template <Scalar S> using Solver = BasicSolver<S, DRAPE_BUILT_IN_SHAPES>;
 
 }  // namespace drape
+
+// A program of many source files can compile the built-in solvers once instead of in every file that steps
+// one: define DRAPE_EXTERN_SOLVERS in all of them, and include <drape/solver_instances.hpp> in one.
+#ifdef DRAPE_EXTERN_SOLVERS
+extern template class drape::SolverFront<drape::Solver<float>, float, DRAPE_BUILT_IN_SHAPES>;
+extern template class drape::BasicSolver<float, DRAPE_BUILT_IN_SHAPES>;
+extern template class drape::SolverFront<drape::Solver<double>, double, DRAPE_BUILT_IN_SHAPES>;
+extern template class drape::BasicSolver<double, DRAPE_BUILT_IN_SHAPES>;
+#endif

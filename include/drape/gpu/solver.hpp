@@ -25,11 +25,11 @@
 
 #include <drape/cloth/asset.hpp>
 #include <drape/cloth/state.hpp>
+#include <drape/front_end.hpp>
 #include <drape/gpu/program.hpp>
 #include <drape/gpu/shapes.hpp>
 #include <drape/gpu/shader_sources.hpp>
 #include <drape/settings.hpp>
-#include <drape/solver.hpp>  // drape::Pin
 
 #include <drape/sdf/solid.hpp>
 
@@ -80,20 +80,20 @@ inline FaceColours colourFaces(const std::vector<std::array<Index, 3>>& triangle
   return out;
 }
 
-class Solver {
+class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
+  using Front = SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES>;
+  friend Front;
+
  public:
-  using scalar_type = float;
-  /// Whether this solver takes solids of that shape type.
-  template <class Shape> static constexpr bool kHasShape = kGpuShape<Shape>;
+  using Front::solidCount;
+  using Front::vertexCount;
 
   /// Uploads the asset's constraints and its rest state (masses from areaDensity, kg/m^2). `context` must be
   /// current and outlive the solver.
   Solver(Context& context, std::shared_ptr<const ClothAsset<float>> asset, const Settings& settings = {},
          double areaDensity = 0.1)
-      : context_((context.makeCurrent(), &context)),  // current before the kernels compile
-        asset_((drape::detail::require(asset != nullptr, "the cloth asset is null"), std::move(asset))),
-        settings_((check(settings), settings)),
-        state_(ClothState<float>::fromAsset(*asset_, areaDensity)),
+      : Front((context.makeCurrent(), std::move(asset)), settings, areaDensity),  // current before the kernels compile
+        context_(&context),
         predict_("predict", shaders::predict),
         solve_("solve_distance", shaders::solve_distance),
         update_("update_velocity", shaders::update_velocity),
@@ -137,156 +137,6 @@ class Solver {
     upload();
   }
 
-  const Settings& settings() const { return settings_; }
-  /// Takes new settings (checked first: a bad field, or one the GPU does not run yet, changes nothing).
-  void setSettings(const Settings& s) {
-    check(s);
-    settings_ = s;
-  }
-
-  // --- solids ------------------------------------------------------------------------------------------------
-  /// Adds the solid (static or kinematic) and returns its index among the solids of its shape type, as the CPU
-  /// solver does. The kernels for its shape are compiled on the first solid of that shape, a mesh's grid nodes
-  /// uploaded on the first solid with that grid.
-  template <class Shape> Index addSolid(const Solid<Shape>& solid) {
-    static_assert(kHasShape<Shape>, "the GPU solver has no field for this shape type");
-    drape::detail::validateSolid(solid, "solid");
-    checkSupported(solid);
-    context_->makeCurrent();
-    compileFor<Shape>(solid.motion == Motion::Dynamic);
-    auto compiled = drape::detail::compileSolid<Shape, float>(solid, state_.origin);
-    uploadShapeData(compiled);
-    auto& list = std::get<std::vector<Solid<Shape>>>(solids_);
-    list.push_back(solid);
-    std::get<std::vector<CompiledSolid<Shape, float>>>(compiled_).push_back(std::move(compiled));
-    return Index(list.size()) - 1;
-  }
-  template <class Shape> const Solid<Shape>& solid(Index k) const {
-    static_assert(kHasShape<Shape>, "the GPU solver has no field for this shape yet");
-    const auto& list = std::get<std::vector<Solid<Shape>>>(solids_);
-    drape::detail::require(k >= 0 && k < Index(list.size()), "solid index " + std::to_string(k) + " out of range");
-    return list[std::size_t(k)];
-  }
-  template <class Shape> void setSolid(Index k, const Solid<Shape>& s) {
-    static_assert(kHasShape<Shape>, "the GPU solver has no field for this shape yet");
-    auto& list = std::get<std::vector<Solid<Shape>>>(solids_);
-    drape::detail::require(k >= 0 && k < Index(list.size()), "solid index " + std::to_string(k) + " out of range");
-    drape::detail::validateSolid(s, "solid " + std::to_string(k));
-    checkSupported(s);
-    context_->makeCurrent();
-    compileFor<Shape>(s.motion == Motion::Dynamic);
-    auto compiled = drape::detail::compileSolid<Shape, float>(s, state_.origin);
-    uploadShapeData(compiled);
-    list[std::size_t(k)] = s;
-    std::get<std::vector<CompiledSolid<Shape, float>>>(compiled_)[std::size_t(k)] = std::move(compiled);
-    dropUnusedShapeData();
-  }
-  /// Calls f(const CompiledSolid<Shape, float>&) for every solid, compiled at the current local origin (for the
-  /// metrics, which read the state back).
-  template <class F> void forEachSolid(F&& f) const {
-    std::apply(
-        [&](const auto&... lists) {
-          (
-              [&](const auto& list) {
-                using Shape = std::decay_t<decltype(list.front().shape)>;
-                for (const auto& held : list) f(drape::detail::compileSolid<Shape, float>(held, state_.origin));
-              }(lists),
-              ...);
-        },
-        solids_);
-  }
-
-  /// The force and torque (about its centre) the cloth passed to each coupled body in the last substep (N, N m),
-  /// in the order of the solids (by shape type, then as added).
-  const std::vector<Eigen::Vector3d>& bodyForces() const { return bodyForce_; }
-  const std::vector<Eigen::Vector3d>& bodyTorques() const { return bodyTorque_; }
-
-  const ClothAsset<float>& asset() const { return *asset_; }
-  Index vertexCount() const { return asset_->vertexCount(); }
-
-  /// The state as the GPU has it now (read back on each call).
-  const ClothState<float>& state() const {
-    download();
-    return state_;
-  }
-  Eigen::Vector3d position(Index i) const {
-    checkVertex(i);
-    download();
-    return state_.origin + state_.x[std::size_t(i)].cast<double>();
-  }
-  Eigen::Vector3d velocity(Index i) const {
-    checkVertex(i);
-    download();
-    return state_.v[std::size_t(i)].cast<double>();
-  }
-
-  /// Replaces all positions (m, world); rejects a wrong count, a non-finite position or one beyond 1e9 m, or a
-  /// cloth spread over more than 1e5 m, before changing anything. The local origin moves to the new positions
-  /// (snapped to 1/64 m, as on the CPU).
-  void setPositions(const std::vector<Eigen::Vector3d>& world) {
-    drape::detail::require(Index(world.size()) == vertexCount(),
-                           "setPositions got " + std::to_string(world.size()) + " positions for " +
-                               std::to_string(vertexCount()) + " vertices");
-    for (std::size_t i = 0; i < world.size(); ++i)
-      drape::detail::require(drape::detail::allFinite(world[i]) && world[i].cwiseAbs().maxCoeff() <= 1e9,
-                             "position of vertex " + std::to_string(i) + " is not finite or lies beyond 1e9 m");
-    Eigen::Vector3d centre = Eigen::Vector3d::Zero();
-    for (const auto& p : world) centre += p / double(world.size());
-    const Eigen::Vector3d origin = snapOrigin(centre);
-    for (std::size_t i = 0; i < world.size(); ++i)
-      drape::detail::require((world[i] - origin).cwiseAbs().maxCoeff() <= 1e5,
-                             "position of vertex " + std::to_string(i) + " lies more than 1e5 m from the cloth's centre");
-    download();
-    state_.origin = origin;
-    for (std::size_t i = 0; i < world.size(); ++i) state_.x[i] = (world[i] - origin).cast<float>();
-    upload();
-  }
-  /// Replaces all velocities (m/s); rejects a wrong count or a non-finite or absurd value before changing anything.
-  void setVelocities(const std::vector<Eigen::Vector3d>& v) {
-    drape::detail::require(Index(v.size()) == vertexCount(),
-                           "setVelocities got " + std::to_string(v.size()) + " velocities for " +
-                               std::to_string(vertexCount()) + " vertices");
-    for (std::size_t i = 0; i < v.size(); ++i)
-      drape::detail::require(drape::detail::allFinite(v[i]) && v[i].cwiseAbs().maxCoeff() <= 1e5,
-                             "velocity of vertex " + std::to_string(i) + " is not finite or has a component beyond 1e5 m/s");
-    download();
-    for (std::size_t i = 0; i < v.size(); ++i) state_.v[i] = v[i].cast<float>();
-    upload();
-  }
-  /// Sets one vertex's inverse mass (1/kg); 0 fixes it where it is.
-  void setInverseMass(Index i, double invMass) {
-    checkVertex(i);
-    drape::detail::require(std::isfinite(invMass) && invMass >= 0 && invMass <= double(std::numeric_limits<float>::max()) &&
-                               (invMass == 0 || invMass >= double(std::numeric_limits<float>::min())),
-                           "inverse mass of vertex " + std::to_string(i) +
-                               " must be finite, >= 0 and representable in float (got " + std::to_string(invMass) + ")");
-    download();
-    state_.invMass[std::size_t(i)] = float(invMass);
-    if (invMass == 0) state_.v[std::size_t(i)].setZero();
-    upload();
-  }
-  /// Fixes a vertex where it is (inverse mass 0).
-  void pin(Index i) { setInverseMass(i, 0); }
-  /// Attaches a vertex to a world target; with pinCompliance 0 and inverse mass 0 it follows the target
-  /// exactly, otherwise it is pulled by a zero-length XPBD constraint. Returns the pin's index.
-  Index attach(Index i, const Eigen::Vector3d& target) {
-    checkVertex(i);
-    drape::detail::require(drape::detail::allFinite(target), "pin target of vertex " + std::to_string(i) + " is not finite");
-    pins_.push_back({i, target});
-    return Index(pins_.size()) - 1;
-  }
-  void setPinTarget(Index pin, const Eigen::Vector3d& target) {
-    drape::detail::require(pin >= 0 && pin < Index(pins_.size()), "pin index " + std::to_string(pin) + " out of range");
-    drape::detail::require(drape::detail::allFinite(target), "pin target is not finite");
-    pins_[std::size_t(pin)].target = target;
-  }
-  const std::vector<Pin>& pins() const { return pins_; }
-
-  /// Advances by dt seconds in subStepCount substeps, on the GPU. Only the cloth's centre (16 bytes) is read
-  /// back, to move the local origin after the cloth.
-  void step(double dt) {
-    step(dt, [](const Solver&) {});
-  }
   /// The GPU's position buffer (vec4: position relative to state().origin, inverse mass) and the faces, colour
   /// by colour, for drawing the cloth where it is (Renderer::drawTriangles) without reading it back.
   const Buffer<layout::Vertex>& positionBuffer() const { return positions_; }
@@ -299,25 +149,17 @@ class Solver {
     context_->makeCurrent();
     glFinish();
   }
-  /// The same, calling onSubStep(solver) after every substep (what it reads is read back then).
-  template <class Observer> void step(double dt, Observer&& onSubStep) {
-    drape::detail::require(std::isfinite(dt) && dt > 0 && dt <= 10,
-                           "step dt must be in (0, 10] s (got " + std::to_string(dt) + ")");
-    drape::detail::require(dt / settings_.subStepCount >= 1e-6,
-                           "step dt / subStepCount must be at least 1e-6 s (got " +
-                               std::to_string(dt / settings_.subStepCount) + ")");
-    context_->makeCurrent();
-    rebase();
-    const double h = dt / settings_.subStepCount;
-    for (int sub = 0; sub < settings_.subStepCount; ++sub) {
-      subStep(h);
-      fresh_ = false;
-      onSubStep(std::as_const(*this));
-      context_->makeCurrent();
-    }
-  }
-
  private:
+  using Front::asset_;
+  using Front::bodies_;
+  using Front::bodyCentre_;
+  using Front::bodyForce_;
+  using Front::bodyTorque_;
+  using Front::compiled_;
+  using Front::pins_;
+  using Front::settings_;
+  using Front::state_;
+
   /// One solid as this substep's kernels see it.
   struct SolidPass {
     layout::ShapeCode code;
@@ -329,11 +171,6 @@ class Solver {
     const Buffer<layout::Vertex>* data;  ///< a mesh's grid nodes or a hull's faces and edges, else null
     Vec3<float> boxLow, boxHigh;         ///< where phi may be below the distance to the box (+-FLT_MAX: anywhere)
   };
-  void checkVertex(Index i) const {
-    drape::detail::require(i >= 0 && i < vertexCount(), "vertex index " + std::to_string(i) + " out of range [0, " +
-                                                            std::to_string(vertexCount()) + ")");
-  }
-
   /// The shape's vertex, face and repulsion kernels (the face pass only for a curved one), once per shape type.
   template <class Shape> void compileFor(bool body) {
     ShapeKernels& k = kernels_[shapeCode<Shape>()];
@@ -391,16 +228,35 @@ class Solver {
     faces_.assign(coloured.faces);
   }
 
-  /// Checks the settings (Settings::validate): the GPU runs every valid setting.
-  static void check(const Settings& s) { s.validate(); }
-  template <class Shape> static void checkSupported(const Solid<Shape>&) {}
+  // --- the front end's hooks (SolverFront) ------------------------------------------------------------------
+  void loadState() const { download(); }
+  void storeState(StateChange) { upload(); }
+  /// The settings the GPU does not run: it always culls (bounding boxes and spheres, which drop no contact) and
+  /// its parallelism is the device's, so turning culling or the broad phase off, or asking for CPU threads,
+  /// is an error rather than a setting silently ignored.
+  static void checkSettings(const Settings& s) {
+    drape::detail::require(s.culling, "the GPU solver always culls faces: Settings::culling = false is not supported");
+    drape::detail::require(s.broadPhase,
+                           "the GPU solver always culls by bounding box: Settings::broadPhase = false is not supported");
+    drape::detail::require(s.threadCount == 1, [&] {
+      return "the GPU solver runs on the device: Settings::threadCount must be 1 (got " +
+             std::to_string(s.threadCount) + ")";
+    });
+  }
+  /// Compiles the solid's kernels before the front end takes it (a kernel that fails to compile changes nothing).
+  template <class Shape> void checkSolid(const Solid<Shape>& solid) {
+    context_->makeCurrent();
+    compileFor<Shape>(solid.motion == Motion::Dynamic);
+  }
+  /// Uploads the shape data of solid k (a mesh's grid, a hull's faces), and frees what no solid uses any more.
+  template <class Shape> void solidSet(Index k) {
+    uploadShapeData(std::get<std::vector<CompiledSolid<Shape, float>>>(compiled_)[std::size_t(k)]);
+    dropUnusedShapeData();
+  }
 
-  /// p to the nearest multiple of 1/64 m in each coordinate: a shift by it is exact in float.
-  static Eigen::Vector3d snapOrigin(const Eigen::Vector3d& p) { return (p * 64.0).array().round().matrix() / 64.0; }
-
-  /// Moves the local origin after the cloth once its centre is kRebaseDistance away, by a multiple of 1/64 m
-  /// so the shift is exact in float (BasicSolver::rebase). The centre is summed on the GPU.
-  void rebase() {
+  /// Moves the local origin after the cloth (SolverFront::moveOrigin). The centre is summed on the GPU.
+  void beginStep() {
+    context_->makeCurrent();
     const auto n = unsigned(vertexCount());
     positions_.bind(layout::kPositions);
     reduction_.bind(layout::kReduction);
@@ -409,57 +265,31 @@ class Solver {
     glDispatchCompute(1, 1, 1);
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
     const layout::Vertex c = reduction_.read()[0];
-    const Eigen::Vector3d centre(c.x, c.y, c.z);
-    if (!(centre.norm() >= 0.5)) return;
-    const Eigen::Vector3d shift = snapOrigin(centre);
+    const Eigen::Vector3d shift = moveOrigin(Eigen::Vector3d(c.x, c.y, c.z));
+    if (shift.isZero(0)) return;
     const Vec3<float> shiftF = shift.cast<float>();
     translate_.set(layout::kCount, n);
     translate_.set(layout::kShift, shiftF.x(), shiftF.y(), shiftF.z());
     translate_.dispatch(n);
-    state_.origin += shift;
   }
 
   /// This substep's solids in the CPU solver's order (by shape type, then as added), each moved first if
   /// kinematic (prepareSolids) and its field packed for the kernels (packShape).
   void prepareSolids(double hd) {
     passes_.clear();
-    bodies_.clear();
-    bodyCentre_.clear();
-    friction_ = repulsive_ = reconcile_ = false;
-    std::apply(
-        [&](auto&... lists) {
-          (
-              [&](auto& list) {
-                using Shape = std::decay_t<decltype(list.front().shape)>;
-                auto& out = std::get<std::vector<CompiledSolid<Shape, float>>>(compiled_);
-                for (std::size_t k = 0; k < list.size(); ++k) {
-                  Solid<Shape>& held = list[k];
-                  drape::detail::advancePose(held, hd);
-                  drape::detail::recompileSolid<Shape, float>(out[k], held, state_.origin);
-                  const CompiledSolid<Shape, float>& compiled = out[k];
-                  SolidPass p{shapeCode<Shape>(), packShape(compiled.sdf), compiled.motion, !Sdf<Shape, float>::kLinear,
-                              compiled.repulsionRadius, compiled.falloff, shapeData(shapeDataKey(compiled)),
-                              Vec3<float>::Constant(-std::numeric_limits<float>::max()),
-                              Vec3<float>::Constant(std::numeric_limits<float>::max())};
-                  if (compiled.bounded) p.boxLow = compiled.boxLow, p.boxHigh = compiled.boxHigh;
-                  if (held.motion == Motion::Dynamic) {
-                    p.motion.body = std::int32_t(bodies_.size());
-                    bodies_.push_back(held.body);
-                    bodyCentre_.push_back(held.pose.position);  // the field's centre, not the body's now
-                  }
-                  friction_ = friction_ || p.motion.staticFriction > 0 || p.motion.dynamicFriction > 0;
-                  repulsive_ = repulsive_ || p.repulsionRadius > 0;
-                  reconcile_ = reconcile_ || p.curved;
-                  passes_.push_back(p);
-                }
-              }(lists),
-              ...);
-        },
-        solids_);
-    reconcile_ = reconcile_ || passes_.size() > 1;
-    coupled_ = !bodies_.empty();
-    bodyForce_.assign(bodies_.size(), Eigen::Vector3d::Zero());
-    bodyTorque_.assign(bodies_.size(), Eigen::Vector3d::Zero());
+    const SolidFeatures has = Front::prepareSolids(hd, [&](const auto& compiled, const auto& held) {
+      using Shape = std::decay_t<decltype(held.shape)>;
+      SolidPass p{shapeCode<Shape>(), packShape(compiled.sdf), compiled.motion, !Sdf<Shape, float>::kLinear,
+                  compiled.repulsionRadius, compiled.falloff, shapeData(shapeDataKey(compiled)),
+                  Vec3<float>::Constant(-std::numeric_limits<float>::max()),
+                  Vec3<float>::Constant(std::numeric_limits<float>::max())};
+      if (compiled.bounded) p.boxLow = compiled.boxLow, p.boxHigh = compiled.boxHigh;
+      passes_.push_back(p);
+    });
+    friction_ = has.friction;
+    repulsive_ = has.repulsion;
+    reconcile_ = has.reconcile;
+    coupled_ = has.coupled;
     if (coupled_ && bodySums_.size() != bodies_.size()) {
       bodyData_.assign(std::vector<layout::Body>(bodies_.size()));
       bodySums_.assign(std::vector<layout::BodySum>(bodies_.size()));
@@ -651,6 +481,7 @@ class Solver {
   }
 
   void subStep(double hd) {
+    context_->makeCurrent();  // an observer of the last substep may have made another context current
     const float h = float(hd);
     const auto n = unsigned(vertexCount());
     prepareSolids(hd);
@@ -767,6 +598,7 @@ class Solver {
     }
     // 5. the cloth's push on the coupled bodies, applied before they move (docs/design.md §6)
     if (coupled_) gatherContactForces(h);
+    fresh_ = false;  // the CPU copy of the state is behind now
   }
 
   /// The velocity split, then propagation (collide's second half).
@@ -817,21 +649,7 @@ class Solver {
   }
 
   Context* context_;
-  std::shared_ptr<const ClothAsset<float>> asset_;
-  Settings settings_;
-  mutable ClothState<float> state_;  ///< the CPU copy: current when fresh_
-  mutable bool fresh_ = true;
-  /// The solids by shape type, in the CPU solver's order, posed as of the last substep.
-  std::tuple<std::vector<Solid<Plane>>, std::vector<Solid<Sphere>>, std::vector<Solid<Box>>,
-             std::vector<Solid<Capsule>>, std::vector<Solid<Cylinder>>, std::vector<Solid<ConvexHull>>,
-             std::vector<Solid<MeshShape>>>
-      solids_;
-  /// Their fields, compiled at the substep's pose (recompileSolid keeps a hull's query data and a grid).
-  std::tuple<std::vector<CompiledSolid<Plane, float>>, std::vector<CompiledSolid<Sphere, float>>,
-             std::vector<CompiledSolid<Box, float>>, std::vector<CompiledSolid<Capsule, float>>,
-             std::vector<CompiledSolid<Cylinder, float>>, std::vector<CompiledSolid<ConvexHull, float>>,
-             std::vector<CompiledSolid<MeshShape, float>>>
-      compiled_;
+  mutable bool fresh_ = true;  ///< the CPU copy of the state (SolverFront::state_) is current
   std::vector<SolidPass> passes_;  ///< this substep's solids (prepareSolids)
   bool friction_ = false;    ///< some solid has friction this substep
   bool repulsive_ = false;   ///< some solid has a repulsion region this substep
@@ -849,19 +667,15 @@ class Solver {
   std::vector<ShapeData> shapeData_;  ///< every grid and hull the solids use, uploaded once each
   Buffer<std::uint32_t> flags_;   ///< per settle pass: whether its vertex passes found a contact
   bool coupled_ = false;          ///< some solid is a dynamic body this substep
-  std::vector<CoupledBody*> bodies_;          ///< the dynamic solids' bodies, this substep
-  std::vector<Eigen::Vector3d> bodyCentre_;  ///< their centres where the substep's contacts were found (world)
   Buffer<layout::Vertex> vStart_, vPre_;      ///< velocities at the substep's start, before the contacts
   Buffer<layout::Lines> lines_;
   Buffer<layout::BodyPush> pushes_;
   Buffer<layout::Body> bodyData_;
   Buffer<layout::BodySum> bodySums_;
   Buffer<float> shares_;
-  std::vector<Eigen::Vector3d> bodyForce_, bodyTorque_;  ///< what the cloth passed to each, last substep
   static constexpr int kSettlePasses = 4;  ///< extra vertex passes where solids meet (BasicSolver::kSettlePasses)
   Program predict_, solve_, update_, respond_, respondFriction_, propagate_, centre_, translate_, pinKernel_, settle_,
       frictionKernel_, contactForces_, bodySumKernel_, shareKernel_;
-  std::vector<Pin> pins_;  ///< targets in world coordinates (uploaded each substep, in the local frame then)
   Buffer<layout::PinSlot> pinSlots_;
   Buffer<float> pinLambdas_;
   Buffer<std::array<std::uint32_t, 4>> faces_;  ///< the faces, colour by colour (colourFaces)
