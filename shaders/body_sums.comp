@@ -20,8 +20,8 @@ void main() {
     for (uint e = 0u; e < uint(DRAPE_CONTACT_SLOTS); ++e) {
       const BodyPush p = pushes[uint(DRAPE_CONTACT_SLOTS) * i + e];
       if (p.body != b) continue;
-      const int at = 2 * p.kind;  // direct 0-1, exchange 2-3, pinch 4-5
-      acc[at] += dvec4(dvec3(p.force.xyz), p.kind == 2 ? 1.0lf : double(p.force.w));
+      const int at = 2 * p.kind;  // DRAPE_PUSH_*: direct 0-1, exchange 2-3, pinch 4-5
+      acc[at] += dvec4(dvec3(p.force.xyz), p.kind == DRAPE_PUSH_PINCH ? 1.0lf : double(p.force.w));
       acc[at + 1] += dvec4(dvec3(p.torque.xyz), 0.0lf);
     }
   for (int k = 0; k < 6; ++k) partial[k][t] = acc[k];

@@ -31,9 +31,9 @@ layout(location = DRAPE_U_BODY) uniform int body;  // the coupled body this soli
 const int body = -1;
 #endif
 
-const int kMaxCuts = 16;
+const int kMaxCuts = DRAPE_MAX_CUTS;
 const int kMaxVertices = 2 * kMaxCuts + 6;
-const float kGap = 3e-4;
+const float kGap = DRAPE_FACE_SEARCH_GAP;
 
 vec3 cuts[kMaxCuts];
 vec3 poly[kMaxVertices];
@@ -121,7 +121,7 @@ void main() {
     const vec3 cut = cutAt(bb, phi, n, e1, e2);
     if (cutCount == kMaxCuts) {  // keep the cuts active at the model's minimum
       int kept = 0;
-      precise const float slack = 0.01 * tolerance;
+      precise const float slack = DRAPE_CUT_SLACK * tolerance;
       for (int k = 0; k < cutCount; ++k)
         if (dot3(cuts[k], bb) >= model - slack && kept < kMaxCuts - 1) cuts[kept++] = cuts[k];
       if (kept == kMaxCuts - 1) exact = false;
@@ -167,7 +167,7 @@ void main() {
 #else
   // Projected gradient descent over the barycentric simplex (the CPU twin: descendOnFace), for a field that may
   // not be convex: Barzilai-Borwein step lengths, halved when a step does not lower phi.
-  const float kMinStep = 1e-3;
+  const float kMinStep = DRAPE_MIN_DESCENT_STEP;
   vec3 slope = slopeAt(gradC, x0, x1, x2);
   const float slopeLen = length3(slope);
   float alpha = slopeLen > 0.0 ? 1.0 / slopeLen : 0.0;  // the first trial moves one unit

@@ -25,8 +25,8 @@ vec3 rotateBack(vec3 r0, vec3 r1, vec3 r2, vec3 v) {
 
 // --- contact records (the CPU twin: ContactBuffer in include/drape/collision/response.hpp) ---------------------
 
-// Contacts whose normals agree within this cosine share a slot (ContactBuffer::kMergeCos).
-const float kMergeCos = 0.95;
+// Contacts whose normals agree within this cosine share a slot (constants::kMergeCos).
+const float kMergeCos = DRAPE_MERGE_COS;
 
 // An empty record: no slot taken.
 Contact emptyContact() {
@@ -141,12 +141,12 @@ bool applyPositionFriction(vec3 n, vec3 vc, float correction, vec2 mu, inout vec
 // in include/drape/collision/response.hpp): the nearest feasible point among the projections onto every subset of
 // the planes, within kReach times the total violation (or minReach); else the least-squares compromise by
 // Jacobi steps from `fallback`.
-const float kReach = 4.0;
-const int kLeastSquaresSteps = 16;
+const float kReach = DRAPE_REACH;
+const int kLeastSquaresSteps = DRAPE_LEAST_SQUARES_STEPS;
 
 bool feasibleIn(vec3 n[DRAPE_CONTACT_SLOTS], float b[DRAPE_CONTACT_SLOTS], int count, vec3 y) {
   for (int k = 0; k < count; ++k) {
-    precise const float bound = b[k] - 1e-6 * max(1.0, abs(b[k]));
+    precise const float bound = b[k] - DRAPE_FEASIBLE_SLACK * max(1.0, abs(b[k]));
     if (dot3(n[k], y) < bound) return false;
   }
   return true;
@@ -172,7 +172,7 @@ vec3 nearestInHalfSpaces(vec3 n[DRAPE_CONTACT_SLOTS], float b[DRAPE_CONTACT_SLOT
     for (int k = j + 1; k < count; ++k) {  // the line where planes j and k meet
       precise const float ab = dot3(n[j], n[k]);
       precise const float det = 1.0 - ab * ab;
-      if (det < 1e-6) continue;
+      if (det < DRAPE_PARALLEL_PLANES) continue;
       precise const float ra = b[j] - dot3(n[j], y0), rb = b[k] - dot3(n[k], y0);
       precise const vec3 y = (y0 + ((ra - ab * rb) / det) * n[j]) + ((rb - ab * ra) / det) * n[k];
       candidate[candidates++] = y;
@@ -181,7 +181,7 @@ vec3 nearestInHalfSpaces(vec3 n[DRAPE_CONTACT_SLOTS], float b[DRAPE_CONTACT_SLOT
     precise const float d = n[0].x * (n[1].y * n[2].z - n[1].z * n[2].y) -
                             n[1].x * (n[0].y * n[2].z - n[0].z * n[2].y) +
                             n[2].x * (n[0].y * n[1].z - n[0].z * n[1].y);
-    if (abs(d) > 1e-4) {
+    if (abs(d) > DRAPE_CORNER_DETERMINANT) {
       vec4 m[3] = vec4[3](vec4(n[0], b[0]), vec4(n[1], b[1]), vec4(n[2], b[2]));
       for (int col = 0; col < 3; ++col) {
         int pivot = col;

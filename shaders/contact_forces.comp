@@ -26,12 +26,12 @@ layout(std430, binding = DRAPE_B_PUSHES) writeonly buffer Pushes { BodyPush push
 layout(location = DRAPE_U_COUNT) uniform uint count;
 layout(location = DRAPE_U_STEP) uniform float h;
 layout(location = DRAPE_U_THICKNESS) uniform float thickness;
-layout(location = DRAPE_U_ESTIMATOR) uniform int estimator;  // 0 sub-force, 1 energy, 2 impulse
+layout(location = DRAPE_U_ESTIMATOR) uniform int estimator;  // DRAPE_ESTIMATOR_*
 layout(location = DRAPE_U_NORMAL_ONLY) uniform uint normalOnly;
 layout(location = DRAPE_U_PROPAGATED) uniform uint propagated;
 
-const int kDirect = 0, kExchange = 1, kPinch = 2;
-const float kPinchRate = 0.2;  // share of a pinch's overlap its support undoes per substep
+const int kDirect = DRAPE_PUSH_DIRECT, kExchange = DRAPE_PUSH_EXCHANGE, kPinch = DRAPE_PUSH_PINCH;
+const float kPinchRate = DRAPE_PINCH_RATE;  // share of a pinch's overlap its support undoes per substep
 
 BodyPush entries[DRAPE_CONTACT_SLOTS];
 int entryCount = 0;
@@ -47,7 +47,7 @@ vec3 contactPoint(uint at, int k, Body body) {
   precise const vec3 touch = (x[at].xyz - thickness * n) - body.centre.xyz;
   const vec3 push = lines[at].push[k].xyz, moment = lines[at].moment[k].xyz;
   precise const float along = dot3(push, n);
-  if (!(along > 0.5)) return touch;
+  if (!(along > DRAPE_LINE_MIN_ALONG)) return touch;
   precise const vec3 r = crossOf(n, moment / along) + dot3(touch, n) * n;
   return r;
 }
@@ -85,7 +85,7 @@ bool pinchSupport(uint i, int k) {
   const vec3 n = c.normal[k].xyz;
   int against = -1;
   for (int j = 0; j < int(c.slots.x); ++j)
-    if (j != k && c.body[j] < 0 && dot3(c.normal[j].xyz, n) < -0.5) against = j;
+    if (j != k && c.body[j] < 0 && dot3(c.normal[j].xyz, n) < DRAPE_PINCH_OPPOSING_COS) against = j;
   if (against < 0) return false;
   const Body body = bodies[c.body[k]];
   const vec3 r = contactPoint(i, k, body);
@@ -161,11 +161,11 @@ void main() {
     precise const vec3 dv = vi - pre;                       // what the contacts did
     precise const vec3 otherForce = m * (pre - start) / h;  // constraints and gravity this substep
     precise vec3 energyForce = vec3(0.0);
-    if (estimator == 1) {
+    if (estimator == DRAPE_ESTIMATOR_ENERGY) {
       precise const vec3 d = x[i].xyz - x0[i].xyz;
       precise const float d2 = dot3(d, d);
       precise const float work = 0.5 * m * (dot3(vi, vi) - dot3(start, start)) - dot3(otherForce, d);
-      if (d2 > 1e-24) energyForce = (work / d2) * d;
+      if (d2 > DRAPE_ENERGY_MIN_DISPLACEMENT2) energyForce = (work / d2) * d;
       precise const vec3 balance = m * (vi - start) / h - otherForce;
       const float cap = length3(balance);
       const float size = length3(energyForce);
@@ -177,10 +177,10 @@ void main() {
       if (oneBody && k != top) continue;
       const vec3 n = c.normal[k].xyz;
       precise vec3 onBody = vec3(0.0);
-      if (estimator == 0) {
+      if (estimator == DRAPE_ESTIMATOR_SUB_FORCE) {
         precise const float fn = dot3(otherForce, n);
         if (fn < 0.0) onBody = fn * n;
-      } else if (estimator == 1) {
+      } else if (estimator == DRAPE_ESTIMATOR_ENERGY) {
         onBody = oneBody ? -energyForce : -dot3(energyForce, n) * n;
       } else {
         precise const float dvn = dot3(dv, n);

@@ -12,6 +12,7 @@
 #include <drape/constraints/distance.hpp>
 #include <drape/detail/parallel.hpp>
 #include <drape/front_end.hpp>
+#include <drape/kernel_constants.hpp>
 #include <drape/sdf/grid.hpp>
 #include <drape/sdf/solid.hpp>
 #include <drape/settings.hpp>
@@ -319,7 +320,7 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
         const Vec3<S> d = state_.x[i] - xPrev_[i];
         const S d2 = d.squaredNorm();
         const S work = S(0.5) * m * (v.squaredNorm() - vStart_[i].squaredNorm()) - otherForce.dot(d);
-        if (d2 > S(1e-24)) energyForce = (work / d2) * d;
+        if (d2 > S(constants::kEnergyMinDisplacement2)) energyForce = (work / d2) * d;
         // Over a tiny displacement the work / |d| quotient is unbounded (a particle held still under a body
         // launched it at 400 m/s). The contact's force cannot exceed what the momentum balance allows,
         // |m (v - v_start) / h - F_other|, so its magnitude is capped there; its direction stays along d.
@@ -394,7 +395,7 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     const ContactSlot<S>& c = slots[k];
     int against = -1;
     for (int j = 0; j < contacts_.slotCount[i]; ++j)
-      if (j != k && slots[j].body < 0 && slots[j].normal.dot(c.normal) < S(-0.5)) against = j;
+      if (j != k && slots[j].body < 0 && slots[j].normal.dot(c.normal) < S(constants::kPinchOpposingCos)) against = j;
     if (against < 0) return false;
     const CoupledBody& body = *bodies_[std::size_t(c.body)];
     const Eigen::Vector3d n = c.normal.template cast<double>();
@@ -402,7 +403,7 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     const Eigen::Vector3d centre = bodyCentre_[std::size_t(c.body)];
     const Eigen::Vector3d wall = slots[against].solidVelocity.template cast<double>();
     const double approach =
-        (body.velocityAt(centre + r) - wall).dot(n) + kPinchRate * double(unresolvedOverlap(i, k)) / double(h);
+        (body.velocityAt(centre + r) - wall).dot(n) + constants::kPinchRate * double(unresolvedOverlap(i, k)) / double(h);
     const Eigen::Vector3d rn = r.cross(n);
     const double kn = body.inverseMass() + rn.dot(body.inverseInertiaWorld() * rn);
     Pinch& p = pinch_[std::size_t(c.body)];
@@ -490,7 +491,7 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     const Eigen::Vector3d touch =
         (state_.x[at] - thickness * c.normal).template cast<double>() + state_.origin - bodyCentre_[std::size_t(c.body)];
     const double along = line.push.template cast<double>().dot(n);
-    if (!(along > 0.5)) return touch;  // the slot took in another direction: its contacts do not share a line
+    if (!(along > constants::kLineMinAlong)) return touch;  // the slot took in another direction: its contacts do not share a line
     return n.cross(line.moment.template cast<double>() / along) + touch.dot(n) * n;
   }
 
@@ -601,12 +602,12 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     if (!reconcile_) return;  // a lone plane gives each vertex one surface: nothing to reconcile
     settleOntoContactPlanes();
     if (solidCount() < 2) return;
-    for (int pass = 0; pass < kSettlePasses; ++pass) {
+    for (int pass = 0; pass < constants::kSettlePasses; ++pass) {
       // Every thread reads the count here, between two barriers (the one ending the loop above and the one
       // ending the vertex pass below), so all take the same branch.
       const auto before = stats_.vertexContacts;
       DRAPE_OMP(barrier)
-      projectContacts<false, false>(thickness, S(1e-4) * thickness);
+      projectContacts<false, false>(thickness, S(constants::kSettleSlack) * thickness);
       if (stats_.vertexContacts == before) break;
       settleOntoContactPlanes();
     }
@@ -646,9 +647,6 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
                            settings_.propagationRings);
   }
 
-
-  static constexpr int kSettlePasses = 4;         ///< extra vertex passes where solids meet
-  static constexpr double kPinchRate = 0.2;       ///< share of a pinch's overlap its support undoes per substep
 
   std::vector<PinTarget<S>> pinLocal_;
   std::vector<Vec3<S>> xPrev_, xPredicted_;

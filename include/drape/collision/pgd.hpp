@@ -2,6 +2,7 @@
 // The deepest point of a face in a solid: bounding-sphere culling, and a cutting-plane search over the face's
 // barycentric simplex (in place of the projected gradient descent of the SDF collision paper, Fig 1).
 
+#include <drape/kernel_constants.hpp>
 #include <drape/math.hpp>
 
 #include <algorithm>
@@ -79,8 +80,8 @@ FaceQuery<S> deepestPointOnFace(const Field& sdf, const Vec3<S>& x0, const Vec3<
                                 const Vec3<S>& centroid, S phiC, const Vec3<S>& gradC, int maxIterations,
                                 S floor = std::numeric_limits<S>::infinity()) {
   FaceQuery<S> q{Vec3<S>::Constant(S(1) / S(3)), centroid, gradC, phiC, 1};
-  constexpr int kMaxCuts = 16;
-  constexpr S kGap = S(3e-4);  // stop when within this many longest-edge lengths of the certified minimum
+  constexpr int kMaxCuts = constants::kMaxCuts;
+  constexpr S kGap = S(constants::kFaceSearchGap);
   const Vec3<S> e1 = x1 - x0, e2 = x2 - x0;
   const S extent = std::max({e1.norm(), e2.norm(), (x2 - x1).norm()});
   const S tolerance = kGap * extent;
@@ -114,7 +115,7 @@ FaceQuery<S> deepestPointOnFace(const Field& sdf, const Vec3<S>& x0, const Vec3<
     const Vec3<S> c = cutAt(b, phi, n);
     if (count == kMaxCuts) {  // keep the cuts active at the model's minimum: it stays the minimum
       int kept = 0;
-      const S slack = S(0.01) * tolerance;
+      const S slack = S(constants::kCutSlack) * tolerance;
       for (int k = 0; k < count; ++k)
         if (cuts[k].dot(b) >= model - slack && kept < kMaxCuts - 1) cuts[kept++] = cuts[k];
       if (kept == kMaxCuts - 1) exact = false;  // maybe some dropped: the model's minimum is then no bound
@@ -165,7 +166,7 @@ template <Scalar S, class Field>
 FaceQuery<S> descendOnFace(const Field& sdf, const Vec3<S>& x0, const Vec3<S>& x1, const Vec3<S>& x2,
                            const Vec3<S>& centroid, S phiC, const Vec3<S>& gradC, int maxIterations) {
   FaceQuery<S> q{Vec3<S>::Constant(S(1) / S(3)), centroid, gradC, phiC, 1};
-  constexpr S kMinStep = S(1e-3);
+  constexpr S kMinStep = S(constants::kMinDescentStep);
   const Vec3<S> e1 = x1 - x0, e2 = x2 - x0;
   auto slopeAt = [&](const Vec3<S>& n) {
     const Vec3<S> g(n.dot(x0), n.dot(x1), n.dot(x2));

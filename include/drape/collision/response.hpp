@@ -3,6 +3,7 @@
 // velocity relative to the solid into a normal part (attenuated) and a tangential part (kept, Coulomb
 // friction), and propagate the normal corrections to neighbouring vertices.
 
+#include <drape/kernel_constants.hpp>
 #include <drape/cloth/asset.hpp>
 #include <drape/collision/pgd.hpp>
 #include <drape/sdf/solid.hpp>
@@ -46,8 +47,8 @@ template <Scalar S> struct ContactLine {
 /// agree within kMergeCos share a slot. A record is live when stamp[i] == current, so nothing is cleared per
 /// substep, and a vertex's record is written only by the work item that owns the vertex.
 template <Scalar S> struct ContactBuffer {
-  static constexpr int kSlots = 3;
-  static constexpr S kMergeCos = S(0.95);
+  static constexpr int kSlots = constants::kContactSlots;
+  static constexpr S kMergeCos = S(constants::kMergeCos);
 
   std::vector<std::uint32_t> stamp;
   std::uint32_t current = 0;
@@ -321,8 +322,6 @@ S projectFaceContacts(const CompiledSolid<Shape, S>& solid, S thickness, int pgd
                                                      invMass, contacts, stats, binned);
 }
 
-inline constexpr int kLeastSquaresSteps = 16;  ///< Jacobi steps for a point pinched between surfaces
-inline constexpr double kReach = 4;            ///< farthest accepted move to the planes, in total violations
 
 /// The point nearest to y0 in {y : n_k . y >= b_k} for up to three half-spaces: the nearest feasible point
 /// among the projections onto every subset of the planes, which is the exact projection onto their
@@ -338,13 +337,13 @@ Vec3<S> nearestInHalfSpaces(const Vec3<S>* n, const S* b, int count, const Vec3<
                             S minReach = S(0)) {
   auto feasible = [&](const Vec3<S>& y) {
     for (int k = 0; k < count; ++k)
-      if (n[k].dot(y) < b[k] - S(1e-6) * std::max(S(1), std::abs(b[k]))) return false;
+      if (n[k].dot(y) < b[k] - S(constants::kFeasibleSlack) * std::max(S(1), std::abs(b[k]))) return false;
     return true;
   };
   if (feasible(y0)) return y0;
   S violation = 0;
   for (int k = 0; k < count; ++k) violation += std::max(b[k] - n[k].dot(y0), S(0));
-  const S reach = std::max(S(kReach) * violation, minReach);
+  const S reach = std::max(S(constants::kReach) * violation, minReach);
   const S reach2 = reach * reach;
   Vec3<S> best = y0;
   S bestDist = std::numeric_limits<S>::infinity();
@@ -356,18 +355,18 @@ Vec3<S> nearestInHalfSpaces(const Vec3<S>* n, const S* b, int count, const Vec3<
   for (int j = 0; j < count; ++j)
     for (int k = j + 1; k < count; ++k) {  // the line where planes j and k meet
       const S ab = n[j].dot(n[k]), det = S(1) - ab * ab;
-      if (det < S(1e-6)) continue;  // (nearly) parallel: the single-plane candidates cover it
+      if (det < S(constants::kParallelPlanes)) continue;  // (nearly) parallel: the single-plane candidates cover it
       const S ra = b[j] - n[j].dot(y0), rb = b[k] - n[k].dot(y0);
       consider(y0 + ((ra - ab * rb) / det) * n[j] + ((rb - ab * ra) / det) * n[k]);
     }
   if (count == 3) {  // the corner where all three meet
     Mat3<S> m;
     m << n[0].transpose(), n[1].transpose(), n[2].transpose();
-    if (std::abs(m.determinant()) > S(1e-4)) consider(m.partialPivLu().solve(Vec3<S>(b[0], b[1], b[2])));
+    if (std::abs(m.determinant()) > S(constants::kCornerDeterminant)) consider(m.partialPivLu().solve(Vec3<S>(b[0], b[1], b[2])));
   }
   if (bestDist < std::numeric_limits<S>::infinity()) return best;
   best = fallback;
-  for (int it = 0; it < kLeastSquaresSteps; ++it) {
+  for (int it = 0; it < constants::kLeastSquaresSteps; ++it) {
     Vec3<S> step = Vec3<S>::Zero();
     for (int k = 0; k < count; ++k) step += std::max(b[k] - n[k].dot(best), S(0)) * n[k];
     best += step / S(count);

@@ -5,7 +5,10 @@
 // constants below into #defines and declares the structs in GLSL, and the static_asserts pin the C++ twins to
 // std430's layout.
 
+#include <drape/kernel_constants.hpp>
+
 #include <cstddef>
+#include <cstdio>
 #include <cstdint>
 #include <string>
 
@@ -77,6 +80,11 @@ enum Uniform : int {
   kShape = 32,  ///< vec4[5] (locations 32-36): the solid's field, packed by packShape (gpu/shapes.hpp)
 };
 
+/// The contact-force estimator a dispatch of contact_forces.comp uses (kEstimator).
+enum EstimatorCode : int { kSubForce = 0, kEnergy = 1, kImpulse = 2 };
+/// What a vertex's push to a body is (BodyPush::kind): the body's sums keep the kinds apart.
+enum PushKind : int { kDirect = 0, kExchange = 1, kPinch = 2 };
+
 /// Shape codes for DRAPE_SHAPE, the shape a collision kernel is compiled for.
 enum ShapeCode : int { kPlane = 1, kSphere = 2, kBox = 3, kCapsule = 4, kCylinder = 5, kGridShape = 6, kHull = 7 };
 
@@ -90,7 +98,7 @@ static_assert(sizeof(Constraint) == 16 && alignof(Constraint) == 4);
 static_assert(offsetof(Constraint, a) == 0 && offsetof(Constraint, b) == 4 && offsetof(Constraint, rest) == 8);
 
 /// Up to this many differently facing surfaces per vertex and substep (ContactBuffer::kSlots).
-inline constexpr unsigned kContactSlots = 3;
+inline constexpr unsigned kContactSlots = constants::kContactSlots;
 
 /// A vertex's contacts of the substep (the CPU's ContactBuffer record, ContactSlot per slot): per slot, the
 /// outward normal with the correction (m) in w, the solid's velocity at the contact with the slot's half-space
@@ -170,10 +178,23 @@ struct Vertex {
 };
 static_assert(sizeof(Vertex) == 16 && offsetof(Vertex, w) == 12);
 
+/// A constant as GLSL reads it: an integer as it is, a real rounded to float with enough digits to give that
+/// float back (and a point, so GLSL reads a float).
+inline std::string glslLiteral(long value) { return std::to_string(value); }
+inline std::string glslLiteral(unsigned value) { return std::to_string(value); }
+inline std::string glslLiteral(int value) { return std::to_string(value); }
+inline std::string glslLiteral(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.9g", double(float(value)));
+  std::string s = text;
+  if (s.find_first_of(".e") == std::string::npos) s += ".0";
+  return value < 0 ? "(" + s + ")" : s;
+}
+
 /// The text every kernel is compiled after: the GLSL version, the constants above as #defines, and the structs.
 /// `defines` (e.g. "#define DRAPE_FRICTION 0\\n") go after the version line, before the defaults.
 inline std::string preamble(const std::string& defines = {}) {
-  auto define = [](const char* name, long value) { return "#define " + std::string(name) + " " + std::to_string(value) + "\n"; };
+  const auto define = [](const char* name, auto value) { return "#define " + std::string(name) + " " + glslLiteral(value) + "\n"; };
   std::string s = "#version 430 core\n" + defines;
   s += define("DRAPE_WORKGROUP", kWorkgroup);
   s += define("DRAPE_B_POSITIONS", kPositions);
@@ -218,12 +239,33 @@ inline std::string preamble(const std::string& defines = {}) {
   s += define("DRAPE_SHAPE_CYLINDER", kCylinder);
   s += define("DRAPE_SHAPE_GRID", kGridShape);
   s += define("DRAPE_SHAPE_HULL", kHull);
+  s += define("DRAPE_ESTIMATOR_SUB_FORCE", kSubForce);
+  s += define("DRAPE_ESTIMATOR_ENERGY", kEnergy);
+  s += define("DRAPE_ESTIMATOR_IMPULSE", kImpulse);
+  s += define("DRAPE_PUSH_DIRECT", kDirect);
+  s += define("DRAPE_PUSH_EXCHANGE", kExchange);
+  s += define("DRAPE_PUSH_PINCH", kPinch);
   s += define("DRAPE_B_SHAPE_DATA", kShapeData);
   s += define("DRAPE_B_FLAGS", kFlags);
   s += define("DRAPE_U_SLACK", kSlack);
   s += define("DRAPE_U_PASS", kPass);
   s += define("DRAPE_U_FRESH", kFresh);
   s += define("DRAPE_CONTACT_SLOTS", kContactSlots);
+  // drape/kernel_constants.hpp, rounded to float as the kernels use them.
+  s += define("DRAPE_MERGE_COS", constants::kMergeCos);
+  s += define("DRAPE_FEASIBLE_SLACK", constants::kFeasibleSlack);
+  s += define("DRAPE_PARALLEL_PLANES", constants::kParallelPlanes);
+  s += define("DRAPE_CORNER_DETERMINANT", constants::kCornerDeterminant);
+  s += define("DRAPE_REACH", constants::kReach);
+  s += define("DRAPE_LEAST_SQUARES_STEPS", constants::kLeastSquaresSteps);
+  s += define("DRAPE_MAX_CUTS", constants::kMaxCuts);
+  s += define("DRAPE_FACE_SEARCH_GAP", constants::kFaceSearchGap);
+  s += define("DRAPE_CUT_SLACK", constants::kCutSlack);
+  s += define("DRAPE_MIN_DESCENT_STEP", constants::kMinDescentStep);
+  s += define("DRAPE_PINCH_RATE", constants::kPinchRate);
+  s += define("DRAPE_PINCH_OPPOSING_COS", constants::kPinchOpposingCos);
+  s += define("DRAPE_LINE_MIN_ALONG", constants::kLineMinAlong);
+  s += define("DRAPE_ENERGY_MIN_DISPLACEMENT2", constants::kEnergyMinDisplacement2);
   s += define("DRAPE_B_V_START", kVStart);
   s += define("DRAPE_B_V_PRE", kVPre);
   s += define("DRAPE_B_LINES", kLines);

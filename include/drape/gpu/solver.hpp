@@ -129,7 +129,7 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
     contacts_.assign(std::vector<layout::Contact>(zero.size(), layout::Contact{}));
     rings_.assign(std::vector<layout::Ring>(zero.size(), layout::Ring{}));
     reduction_.assign(std::vector<layout::Vertex>(1));
-    flags_.assign(std::vector<std::uint32_t>(kSettlePasses, 0u));
+    flags_.assign(std::vector<std::uint32_t>(constants::kSettlePasses, 0u));
     const Adjacency& around = asset_->vertexNeighbours;
     neighbourOffsets_.assign(std::vector<std::uint32_t>(around.offsets.begin(), around.offsets.end()));
     neighbours_.assign(std::vector<std::uint32_t>(around.items.begin(), around.items.end()));
@@ -389,7 +389,9 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
     contactForces_.set(layout::kStep, h);
     contactForces_.set(layout::kThickness, float(settings_.thickness));
     glProgramUniform1i(contactForces_.id(), layout::kEstimator,
-                       estimator == ContactForce::SubForce ? 0 : estimator == ContactForce::Energy ? 1 : 2);
+                       estimator == ContactForce::SubForce ? layout::kSubForce
+                       : estimator == ContactForce::Energy ? layout::kEnergy
+                                                           : layout::kImpulse);
     contactForces_.set(layout::kNormalOnly, unsigned(settings_.normalForceOnly));
     contactForces_.set(layout::kPropagated, unsigned(propagated));
     contactForces_.dispatch(n);
@@ -454,8 +456,8 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
     if (passes_.size() < 2) return;
     glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);  // a clear after shader writes
     glClearNamedBufferData(flags_.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, nullptr);
-    const float slack = 1e-4f * float(settings_.thickness);
-    for (int pass = 0; pass < kSettlePasses; ++pass) {
+    const float slack = float(constants::kSettleSlack) * float(settings_.thickness);
+    for (int pass = 0; pass < constants::kSettlePasses; ++pass) {
       for (const SolidPass& p : passes_) vertexPass(p, false, pass, slack);
       settle(pass);
     }
@@ -673,7 +675,6 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
   Buffer<layout::Body> bodyData_;
   Buffer<layout::BodySum> bodySums_;
   Buffer<float> shares_;
-  static constexpr int kSettlePasses = 4;  ///< extra vertex passes where solids meet (BasicSolver::kSettlePasses)
   Program predict_, solve_, update_, respond_, respondFriction_, propagate_, centre_, translate_, pinKernel_, settle_,
       frictionKernel_, contactForces_, bodySumKernel_, shareKernel_;
   Buffer<layout::PinSlot> pinSlots_;

@@ -1,0 +1,51 @@
+#pragma once
+// The numbers a CPU kernel and its GLSL twin must agree on, in one place (docs/design.md §9). The C++ kernels
+// read them here; the shaders get them from gpu::layout::preamble() as #defines of the same value rounded to
+// float, so no number is typed twice and a change here changes both.
+
+namespace drape::constants {
+
+/// Differently facing surfaces a vertex records per substep (a crease, a box corner, a pinch).
+inline constexpr int kContactSlots = 3;
+/// A contact whose normal is within this cosine of a recorded slot's is the same surface seen again.
+inline constexpr double kMergeCos = 0.95;
+
+// The nearest point in up to three half-spaces (nearestInHalfSpaces).
+/// A point is inside a half-space n . y >= b up to this much times max(1, |b|).
+inline constexpr double kFeasibleSlack = 1e-6;
+/// Two planes with 1 - (n_j . n_k)^2 below this are parallel: the single-plane candidates cover them.
+inline constexpr double kParallelPlanes = 1e-6;
+/// Three planes whose normals' determinant is below this have no corner worth trying.
+inline constexpr double kCornerDeterminant = 1e-4;
+/// Farthest accepted move to the planes, in total violations (tangent planes say nothing far away).
+inline constexpr double kReach = 4;
+/// Jacobi steps of the least-squares compromise for a point pinched between surfaces.
+inline constexpr int kLeastSquaresSteps = 16;
+
+// The search for a face's deepest point (docs/design.md §3).
+/// Most cutting planes the convex search keeps.
+inline constexpr int kMaxCuts = 16;
+/// The search stops within this many longest-edge lengths of the certified minimum.
+inline constexpr double kFaceSearchGap = 3e-4;
+/// A cut is kept while it is within this share of the tolerance of the model's minimum.
+inline constexpr double kCutSlack = 0.01;
+/// Projected gradient descent stops when a step moves every barycentric coordinate less than this.
+inline constexpr double kMinDescentStep = 1e-3;
+
+// Several solids meeting (docs/design.md §16).
+/// Extra vertex passes on the true fields where solids meet.
+inline constexpr int kSettlePasses = 4;
+/// Those passes leave a vertex alone within this share of the thickness of the contact shell.
+inline constexpr double kSettleSlack = 1e-4;
+
+// Two-way coupling (docs/design.md §6).
+/// Share of a pinch's overlap its support undoes per substep.
+inline constexpr double kPinchRate = 0.2;
+/// A fixed solid pinches a vertex against a body when their normals' cosine is below this.
+inline constexpr double kPinchOpposingCos = -0.5;
+/// A slot's contacts share a line of action only where its summed push is at least this along its normal.
+inline constexpr double kLineMinAlong = 0.5;
+/// The energy estimate needs a displacement of squared length above this (m^2).
+inline constexpr double kEnergyMinDisplacement2 = 1e-24;
+
+}  // namespace drape::constants
