@@ -10,6 +10,9 @@
 #include <drape/collision/pgd.hpp>
 #include <drape/collision/response.hpp>
 #include <drape/constraints/distance.hpp>
+#include <drape/coupling/contact_forces.hpp>
+#include <drape/coupling/repel.hpp>
+#include <drape/coupling/share.hpp>
 #include <drape/detail/parallel.hpp>
 #include <drape/front_end.hpp>
 #include <drape/kernel_constants.hpp>
@@ -256,262 +259,41 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
         if (!(solid.repulsionRadius > S(0))) continue;
         if (solid.motion.body >= 0) copyVelocities(vPre_);  // scratch: what the region changes is an impulse
         if (solid.falloff == Falloff::Linear)
-          repelVertices<Falloff::Linear>(solid, thickness, state_.x.data(), v, state_.invMass.data(), vertexCount());
+          coupling::repelVertices<Falloff::Linear>(solid, thickness, state_.x.data(), v, state_.invMass.data(),
+                                                   vertexCount());
         else
-          repelVertices<Falloff::Smooth>(solid, thickness, state_.x.data(), v, state_.invMass.data(), vertexCount());
+          coupling::repelVertices<Falloff::Smooth>(solid, thickness, state_.x.data(), v, state_.invMass.data(),
+                                                   vertexCount());
         if (solid.motion.body >= 0) {
+          const std::size_t b = std::size_t(solid.motion.body);
           DRAPE_OMP(single)
-          gatherRepulsionForces(solid, h);
+          coupling::gatherRepulsionForces(solid, this->state_, vPre_.data(), h, this->settings_.normalForceOnly,
+                                          this->bodyCentre_[b], this->bodyForce_[b], this->bodyTorque_[b]);
         }
       }
     });
   }
 
-  /// The velocity the region took from each particle near a dynamic solid, m dv / h, reversed onto the body at
-  /// the particle's closest point on it.
-  template <class Solid> void gatherRepulsionForces(const Solid& solid, S h) {
-    const std::int32_t b = solid.motion.body;
-    const Eigen::Vector3d& centre = bodyCentre_[b];
-    for (Index i = 0; i < vertexCount(); ++i) {
-      const Vec3<S> dv = state_.v[i] - vPre_[i];
-      if (dv.isZero(0)) continue;
-      Vec3<S> n;
-      const S phi = solid.sdf(state_.x[i], n);
-      Eigen::Vector3d force = -(dv / (state_.invMass[i] * h)).template cast<double>();
-      if (settings_.normalForceOnly) force = force.dot(n.template cast<double>()) * n.template cast<double>();
-      const Eigen::Vector3d point = state_.origin + (state_.x[i] - phi * n).template cast<double>();
-      bodyForce_[b] += force;
-      bodyTorque_[b] += (point - centre).cross(force);
-    }
-  }
-
-  /// Phase 2 (docs/design.md §6): for every contact vertex, the force its contacts with each coupled body put on it,
-  /// reversed onto that body at the contact point (the vertex moved back by the thickness along the normal).
-  /// A vertex's velocity change is one vector however many slots made it, so when all its slots belong to one
-  /// body that body gets the whole of it, along the normal of the slot that corrected the vertex most; a vertex
-  /// between two bodies (or a body and a fixed solid) passes each body the normal part along its own slot.
-  /// Serial, in vertex order, so the sums do not depend on the thread count.
+  /// Phase 2 (docs/design.md §6): the cloth's pushes on the coupled bodies (coupling/contact_forces.hpp), each
+  /// body's exchange shared with the vertices that made it (coupling/share.hpp), then the pinches' supports.
   void gatherContactForces(S h, S thickness) {
-    const ContactForce estimator = settings_.contactForce;
-    const bool propagated = estimator == ContactForce::Impulse && settings_.propagationRings > 0 &&
-                            settings_.propagationWeight > 0 && settings_.collisionMethod == CollisionMethod::Improved;
-    pinch_.assign(bodies_.size(), Pinch{});
-    exchange_.assign(bodies_.size(), Exchange{});
-    exchanged_.clear();
-    for (Index i = 0; i < vertexCount(); ++i) {
-      if (!contacts_.live(i)) {
-        if (propagated) gatherPropagatedImpulse(i, h, thickness);
-        continue;
-      }
-      const int count = contacts_.slotCount[i];
-      const auto& slots = contacts_.slots[i];
-      bool oneBody = true;
-      int top = 0;  // the slot that corrected the vertex most
-      for (int k = 1; k < count; ++k) {
-        oneBody = oneBody && slots[k].body == slots[0].body;
-        if (slots[k].correction > slots[top].correction) top = k;
-      }
-      const S m = S(1) / state_.invMass[i];
-      const Vec3<S>& v = state_.v[i];
-      const Vec3<S> dv = v - vPre_[i];                                // what the contacts did
-      const Vec3<S> otherForce = m * (vPre_[i] - vStart_[i]) / h;  // constraints and gravity this substep
-      Vec3<S> energyForce = Vec3<S>::Zero();                          // on the particle
-      if (estimator == ContactForce::Energy) {
-        const Vec3<S> d = state_.x[i] - xPrev_[i];
-        const S d2 = d.squaredNorm();
-        const S work = S(0.5) * m * (v.squaredNorm() - vStart_[i].squaredNorm()) - otherForce.dot(d);
-        if (d2 > S(constants::kEnergyMinDisplacement2)) energyForce = (work / d2) * d;
-        // Over a tiny displacement the work / |d| quotient is unbounded (a particle held still under a body
-        // launched it at 400 m/s). The contact's force cannot exceed what the momentum balance allows,
-        // |m (v - v_start) / h - F_other|, so its magnitude is capped there; its direction stays along d.
-        const S cap = (m * (v - vStart_[i]) / h - otherForce).norm();
-        const S size = energyForce.norm();
-        if (size > cap) energyForce *= cap / size;
-      }
-      for (int k = 0; k < count; ++k) {
-        const ContactSlot<S>& c = slots[k];
-        if (c.body < 0) continue;
-        if (count > 1 && !oneBody && pinchSupport(i, k, h, thickness)) continue;
-        if (oneBody && k != top) continue;
-        const Vec3<S>& n = c.normal;
-        Vec3<S> onBody = Vec3<S>::Zero();
-        switch (estimator) {
-          case ContactForce::SubForce: {
-            const S fn = otherForce.dot(n);
-            if (fn < S(0)) onBody = fn * n;
-            break;
-          }
-          case ContactForce::Energy:
-            onBody = oneBody ? Vec3<S>(-energyForce) : Vec3<S>(-energyForce.dot(n) * n);
-            break;
-          case ContactForce::Impulse: {
-            const S dvn = dv.dot(n);
-            Vec3<S> impulse = (dvn + unresolvedOverlap(i, k) / h) * n;
-            if (oneBody) impulse += dv - dvn * n;  // the tangential (friction) change
-            onBody = -(m / h) * impulse;
-            break;
-          }
-        }
-        if (oneBody)
-          addExchange(c, i, onBody.template cast<double>(), thickness, i, m);
-        else
-          addBodyForce(c, i, onBody.template cast<double>(), thickness);
-      }
-    }
-    shareExchanges();
-    // Each pinch's support was sized to hold the body alone; a body on several shares it among them.
-    for (std::size_t b = 0; b < pinch_.size(); ++b) {
-      if (pinch_[b].count == 0) continue;
-      bodyForce_[b] += pinch_[b].force / pinch_[b].count;
-      bodyTorque_[b] += pinch_[b].torque / pinch_[b].count;
-    }
-  }
-
-  /// The overlap the projections could not resolve for vertex i's slot k, on the slot's own plane or on an
-  /// opposing one (weighted by how squarely it opposes): a vertex pinched between slot k's body and another
-  /// surface ends up behind one of the two planes.
-  S unresolvedOverlap(Index i, int k) const {
-    const auto& slots = contacts_.slots[i];
-    const Vec3<S>& n = slots[k].normal;
-    S overlap = std::max(slots[k].offset - n.dot(state_.x[i]), S(0));
-    for (int j = 0; j < contacts_.slotCount[i]; ++j)
-      if (j != k)
-        overlap += std::max(slots[j].offset - slots[j].normal.dot(state_.x[i]), S(0)) *
-                   std::max(-slots[j].normal.dot(n), S(0));
-    return overlap;
-  }
-
-  /// A vertex held between slot k's body and a fixed (static or kinematic) solid facing it cannot pass on the
-  /// solid's push through its own momentum: its mass is far too small, and the estimates above would hand the
-  /// body a force of about m_vertex / h^2 per metre of overlap, which let a ball sink through a cloth lying on
-  /// the floor to the floor itself (where the pinched vertices then shot out sideways at tens of m/s). The
-  /// pinched cloth is a spacer instead: the solid holds the body through it, with the impulse that stops the
-  /// body's approach at that point (its effective mass there), plus a fifth of the overlap per substep, and
-  /// Coulomb friction with the slot's coefficients against the body's sliding over the vertex. Recorded in
-  /// pinch_ and shared out among the body's pinches at the end. Returns false (nothing recorded) when the
-  /// vertex is not pinched against a fixed solid.
-  bool pinchSupport(Index i, int k, S h, S thickness) {
-    const auto& slots = contacts_.slots[i];
-    const ContactSlot<S>& c = slots[k];
-    int against = -1;
-    for (int j = 0; j < contacts_.slotCount[i]; ++j)
-      if (j != k && slots[j].body < 0 && slots[j].normal.dot(c.normal) < S(constants::kPinchOpposingCos)) against = j;
-    if (against < 0) return false;
-    const CoupledBody& body = *bodies_[std::size_t(c.body)];
-    const Eigen::Vector3d n = c.normal.template cast<double>();
-    const Eigen::Vector3d r = contactPoint(c, i, thickness);
-    const Eigen::Vector3d centre = bodyCentre_[std::size_t(c.body)];
-    const Eigen::Vector3d wall = slots[against].solidVelocity.template cast<double>();
-    const double approach =
-        (body.velocityAt(centre + r) - wall).dot(n) + constants::kPinchRate * double(unresolvedOverlap(i, k)) / double(h);
-    const Eigen::Vector3d rn = r.cross(n);
-    const double kn = body.inverseMass() + rn.dot(body.inverseInertiaWorld() * rn);
-    Pinch& p = pinch_[std::size_t(c.body)];
-    ++p.count;
-    if (!(approach > 0) || !(kn > 0)) return true;
-    const double push = approach / (kn * double(h));  // N, on the body along -n
-    Eigen::Vector3d force = -push * n;
-    Eigen::Vector3d slide = body.velocityAt(centre + r) - state_.v[i].template cast<double>();
-    slide -= slide.dot(n) * n;
-    const double speed = slide.norm();
-    if (speed > 0 && !settings_.normalForceOnly) {
-      slide /= speed;
-      const Eigen::Vector3d rt = r.cross(slide);
-      const double stop = speed / ((body.inverseMass() + rt.dot(body.inverseInertiaWorld() * rt)) * double(h));
-      force -= (stop <= double(c.staticFriction) * push ? stop : std::min(stop, double(c.dynamicFriction) * push)) * slide;
-    }
-    addWrench(c, i, force, thickness, p.force, p.torque);
-    return true;
-  }
-
-  /// A force f on contact slot c's body from vertex `at` (the reverse of what the vertex got: Newton's third
-  /// law holds exactly), acting at contactPoint, added to (force, torque) about the body's centre.
-  void addWrench(const ContactSlot<S>& c, Index at, Eigen::Vector3d f, S thickness, Eigen::Vector3d& force,
-                 Eigen::Vector3d& torque) const {
-    // Without friction a contact can only push along its normal: what else the vertex's change holds (its
-    // slot's merged normals, propagation from neighbours facing other ways) is not the body's to take.
-    if (settings_.normalForceOnly || (c.staticFriction == S(0) && c.dynamicFriction == S(0))) {
-      const Eigen::Vector3d n = c.normal.template cast<double>();
-      f = f.dot(n) * n;
-    }
-    force += f;
-    torque += contactPoint(c, at, thickness).cross(f);
-  }
-  void addBodyForce(const ContactSlot<S>& c, Index at, const Eigen::Vector3d& f, S thickness) {
-    addWrench(c, at, f, thickness, bodyForce_[std::size_t(c.body)], bodyTorque_[std::size_t(c.body)]);
-  }
-  /// addBodyForce for the push f of a vertex (mass m) whose contacts are all with slot c's body: it joins the
-  /// body's Exchange, and the vertex is listed as that body's (shareExchanges).
-  void addExchange(const ContactSlot<S>& c, Index at, const Eigen::Vector3d& f, S thickness, Index vertex, S m) {
-    Exchange& e = exchange_[std::size_t(c.body)];
-    addWrench(c, at, f, thickness, e.force, e.torque);
-    e.vertexSide += f.squaredNorm() / double(m);
-    exchanged_.push_back({vertex, c.body});  // at most one per vertex: the capacity is the vertex count
-  }
-
-  /// The estimates take each vertex's push as if the body could not move. Where the vertices pushing a light
-  /// body together outweigh it, the body got all of their momentum change and left faster than they came, with
-  /// energy from nowhere: a 1.3 g hull met by a dozen vertices spun up to 870 rad/s in one substep. So each
-  /// body's exchange with the vertices that touch only it is an inelastic collision of the two: each push f_i is
-  /// an impulse h f_i between the vertex's mass m_i and the body, and both sides take the share
-  /// s = Q / (Q + J^T M^-1 J) of it, with Q = sum h^2 |f_i|^2 / m_i, J = (F h, T h) the body's summed impulse and M
-  /// its mass matrix. For vertices of total mass M_c pushing alike along n at r, s = 1 / (1 + M_c k) with
-  /// k = 1/m + (r x n)^T I^-1 (r x n): the impulse of two masses meeting, m_eff M_c / (m_eff + M_c) against the
-  /// immovable body's M_c. A heavy body (k M_c -> 0) keeps all of it. The vertices keep the rest of their change
-  /// undone, so they meet the body again the next substep: with the impulse estimate, momentum is still
-  /// exchanged exactly, only later. Pinches, and vertices that also touch another surface, are not scaled.
-  void shareExchanges() {
-    bool partial = false;
-    for (std::size_t b = 0; b < exchange_.size(); ++b) {
-      Exchange& e = exchange_[b];
-      const CoupledBody& body = *bodies_[b];
-      // Both sides of Q / (Q + J^T M^-1 J) without their common factor h^2.
-      const double bodySide =
-          body.inverseMass() * e.force.squaredNorm() + e.torque.dot(body.inverseInertiaWorld() * e.torque);
-      e.share = bodySide > 0 ? e.vertexSide / (e.vertexSide + bodySide) : 1.0;
-      bodyForce_[b] += e.share * e.force;
-      bodyTorque_[b] += e.share * e.torque;
-      partial = partial || e.share < 1;
-    }
-    if (!partial) return;
-    Vec3<S>* v = state_.v.data();
-    for (const auto& [i, b] : exchanged_) {
-      const S share = S(exchange_[std::size_t(b)].share);
-      v[i] = vPre_[i] + share * (v[i] - vPre_[i]);
-    }
-  }
-  /// Where slot c's push acts on its body, from the body's centre (world axes): on the line along the slot's
-  /// normal n whose moment is its contacts' mean moment (ContactLine; the foot of the perpendicular
-  /// from the centre is n x moment / (push . n)), at the height along n where vertex `at` touches the surface.
-  /// So a normal push has the moment of the contacts that made it (none on a ball), and a vertex pushed through a
-  /// face's deepest point, which may not touch the body at all, pushes there.
-  Eigen::Vector3d contactPoint(const ContactSlot<S>& c, Index at, S thickness) const {
-    const ContactLine<S>& line = contacts_.lines[std::size_t(at)][std::size_t(&c - contacts_.slots[at].data())];
-    const Eigen::Vector3d n = c.normal.template cast<double>();
-    const Eigen::Vector3d touch =
-        (state_.x[at] - thickness * c.normal).template cast<double>() + state_.origin - bodyCentre_[std::size_t(c.body)];
-    const double along = line.push.template cast<double>().dot(n);
-    if (!(along > constants::kLineMinAlong)) return touch;  // the slot took in another direction: its contacts do not share a line
-    return n.cross(line.moment.template cast<double>() / along) + touch.dot(n) * n;
-  }
-
-  /// Propagation gave vertex i (not in contact) a velocity change on behalf of its contact neighbours: the
-  /// impulse estimate passes it to the body of the first neighbour in contact with one. (A change that came
-  /// from further rings, or from a fixed solid's contacts, is not passed on.)
-  void gatherPropagatedImpulse(Index i, S h, S thickness) {
-    const Vec3<S> dv = state_.v[i] - vPre_[i];
-    if (dv.isZero(0) || state_.invMass[i] == S(0)) return;
-    const Adjacency& around = asset_->vertexNeighbours;
-    for (const Index* j = around.begin(i); j != around.end(i); ++j) {
-      if (!contacts_.live(*j)) continue;
-      const auto& slots = contacts_.slots[*j];
-      for (int k = 0; k < contacts_.slotCount[*j]; ++k) {
-        if (slots[k].body < 0) continue;
-        const S m = S(1) / state_.invMass[i];
-        addExchange(slots[k], *j, (-(m / h) * dv).template cast<double>(), thickness, i, m);
-        return;
-      }
-    }
+    const coupling::SubstepView<S> view{contacts_,
+                                        state_,
+                                        xPrev_.data(),
+                                        vStart_.data(),
+                                        vPre_.data(),
+                                        asset_->vertexNeighbours,
+                                        bodies_,
+                                        bodyCentre_,
+                                        h,
+                                        thickness,
+                                        settings_.contactForce,
+                                        settings_.normalForceOnly,
+                                        coupling::passesPropagatedImpulse(settings_)};
+    coupling::Gathered out{bodyForce_, bodyTorque_, bodySums_, exchanged_};
+    coupling::gatherContactForces(view, out);
+    coupling::shareExchanges(bodies_, bodySums_, exchanged_, bodyForce_, bodyTorque_, state_.v.data(), vPre_.data());
+    coupling::addPinches(bodySums_, bodyForce_, bodyTorque_);
   }
 
   void solveSet(const DistanceSet<S>& set, const LaneMasses<S>& lanes, S alpha, S* lambda, int iterations) {
@@ -667,19 +449,8 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
   std::vector<Index> nearVertices_, nearFaces_;  ///< what the grid found near the current solid
   S moveBound_ = 0;  ///< the passes' largest vertex moves, summed (shared by the team)
   std::vector<Vec3<S>> vStart_, vPre_;                  ///< velocities at the substep's start, before contacts
-  /// A body's exchange with the vertices whose contacts are all with it, this substep (shareExchanges).
-  struct Exchange {
-    Eigen::Vector3d force = Eigen::Vector3d::Zero(), torque = Eigen::Vector3d::Zero();  ///< estimated, on the body
-    double vertexSide = 0;    ///< sum of |f|^2 / m over those vertices' pushes f
-    double share = 1;         ///< of the estimate both sides take
-  };
-  std::vector<Exchange> exchange_;
-  std::vector<std::pair<Index, std::int32_t>> exchanged_;  ///< the vertices in an Exchange, and its body
-  struct Pinch {  ///< a body's pinchSupport sums this substep
-    Eigen::Vector3d force = Eigen::Vector3d::Zero(), torque = Eigen::Vector3d::Zero();
-    int count = 0;
-  };
-  std::vector<Pinch> pinch_;
+  std::vector<coupling::BodySums> bodySums_;  ///< what each coupled body's exchange and pinches add up to
+  std::vector<std::pair<Index, std::int32_t>> exchanged_;  ///< the vertices in an exchange, and its body
 };
 
 /// The solver with every built-in shape: the analytic ones, the rigid bodies' cylinders and convex hulls, and

@@ -179,24 +179,6 @@ struct CollisionStats {
   std::int64_t sdfEvaluations = 0;
 };
 
-/// Phase 1 (the cloth-rigid coupling thesis, eq. 5.4): every free vertex whose distance beyond the thickness,
-/// d = phi - thickness, lies in [0, R) has its velocity blended toward the solid's there: v' = a v + (1 - a) v_c,
-/// a = falloff(d / R). A work-shared loop; each vertex writes only its own velocity.
-template <Falloff kFalloff, class Shape, Scalar S>
-void repelVertices(const CompiledSolid<Shape, S>& solid, S thickness, const Vec3<S>* x, Vec3<S>* v,
-                   const S* invMass, Index vertexCount) {
-  const S invR = S(1) / solid.repulsionRadius;
-  DRAPE_OMP(for schedule(static))
-  for (Index i = 0; i < vertexCount; ++i) {
-    if (invMass[i] == S(0)) continue;
-    Vec3<S> n;
-    const S t = (solid.sdf(x[i], n) - thickness) * invR;
-    if (!(t >= S(0) && t < S(1))) continue;
-    const S a = kFalloff == Falloff::Linear ? t : t * t * (S(3) - S(2) * t);
-    v[i] = a * v[i] + (S(1) - a) * solid.motion.velocityAt(x[i]);
-  }
-}
-
 /// Which vertices (or faces) a pass visits: all of them, or a list from the broad phase. Both are inlined, so
 /// the full pass pays nothing for the choice.
 struct AllItems {

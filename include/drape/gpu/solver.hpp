@@ -25,6 +25,8 @@
 
 #include <drape/cloth/asset.hpp>
 #include <drape/cloth/state.hpp>
+#include <drape/coupling/contact_forces.hpp>
+#include <drape/coupling/share.hpp>
 #include <drape/front_end.hpp>
 #include <drape/gpu/program.hpp>
 #include <drape/gpu/shapes.hpp>
@@ -383,8 +385,7 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
     bodyData_.write(data);
     bodyData_.bind(layout::kBodies);
     const ContactForce estimator = settings_.contactForce;
-    const bool propagated = estimator == ContactForce::Impulse && settings_.propagationRings > 0 &&
-                            settings_.propagationWeight > 0 && settings_.collisionMethod == CollisionMethod::Improved;
+    const bool propagated = coupling::passesPropagatedImpulse(settings_);
     contactForces_.set(layout::kCount, n);
     contactForces_.set(layout::kStep, h);
     contactForces_.set(layout::kThickness, float(settings_.thickness));
@@ -403,9 +404,7 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
       auto vec = [](const double* v) { return Eigen::Vector3d(v[0], v[1], v[2]); };
       CoupledBody& body = *bodies_[b];
       const Eigen::Vector3d ef = vec(sum.exchangeForce), et = vec(sum.exchangeTorque);
-      const double bodySide = body.inverseMass() * ef.squaredNorm() + et.dot(body.inverseInertiaWorld() * et);
-      const double vertexSide = sum.exchangeForce[3];
-      const double s = bodySide > 0 ? vertexSide / (vertexSide + bodySide) : 1.0;
+      const double s = coupling::exchangeShare(body, ef, et, sum.exchangeForce[3]);
       Eigen::Vector3d force = bodyForce_[b] + vec(sum.directForce) + s * ef;  // after the repulsion's
       Eigen::Vector3d torque = bodyTorque_[b] + vec(sum.directTorque) + s * et;
       if (sum.pinchForce[3] > 0) force += vec(sum.pinchForce) / sum.pinchForce[3], torque += vec(sum.pinchTorque) / sum.pinchForce[3];

@@ -2,7 +2,7 @@
 // A rigid body: shape, mass properties, pose and velocities, contact material. drape's implementation of the
 // coupling interface.
 
-#include <drape/rigid/coupling.hpp>
+#include <drape/coupling/body.hpp>
 #include <drape/rigid/shapes.hpp>
 
 #include <optional>

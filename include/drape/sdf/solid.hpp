@@ -2,7 +2,7 @@
 // A solid: a shape, a pose, how it moves, and its friction with the cloth.
 
 #include <drape/detail/parallel.hpp>  // DRAPE_ALWAYS_INLINE
-#include <drape/rigid/coupling.hpp>
+#include <drape/coupling/body.hpp>
 #include <drape/sdf/convex.hpp>  // every shape's compileSdf must be declared before compileSolid
 #include <drape/sdf/grid.hpp>
 #include <drape/sdf/shapes.hpp>

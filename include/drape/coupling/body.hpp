@@ -1,7 +1,7 @@
 #pragma once
-// The coupling interface: what the cloth solver needs from a rigid body, whoever simulates it. drape's own
-// bodies (rigid/body.hpp) implement it; an application that already has a rigid-body engine wraps each of its
-// bodies in a small class implementing it and hands those to the cloth solver instead.
+// The coupling interface (docs/design.md §6): what the cloth solver needs from a rigid body, whoever simulates
+// it. drape's own bodies (rigid/body.hpp) implement it; an application that already has a rigid-body engine
+// wraps each of its bodies in a small class implementing it and hands those to the cloth solver instead.
 //
 // Per substep the cloth solver calls, for each coupled body (never per vertex): pose(), linearVelocity(),
 // angularVelocity() to place and move the body's solid; then, for the contacts it resolved, applyForceAtPoint() with
