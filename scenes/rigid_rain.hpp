@@ -8,7 +8,7 @@
 // Needs libccd (link drape::rigid).
 
 #include <drape/drape.hpp>
-#include <drape/rigid/coupled.hpp>
+#include <drape/coupling/rigid_world.hpp>
 #include <drape/sdf/convex.hpp>  // the bodies' own distance fields (bodyPenetrationAtBodies)
 
 #include <algorithm>

@@ -2,7 +2,7 @@
 // dynamic rigid bodies.
 
 #include <drape/drape.hpp>
-#include <drape/rigid/coupled.hpp>
+#include <drape/coupling/rigid_world.hpp>
 
 #include "coupling_helpers.hpp"
 

@@ -10,7 +10,7 @@
 #include "state_hash.hpp"
 
 #include <drape/drape.hpp>
-#include <drape/rigid/coupled.hpp>
+#include <drape/coupling/rigid_world.hpp>
 
 #include <gutter.hpp>
 #include <rigid_rain.hpp>

@@ -5,7 +5,7 @@
 #include "gpu_helpers.hpp"
 
 #include <drape/drape.hpp>
-#include <drape/rigid/coupled.hpp>
+#include <drape/coupling/rigid_world.hpp>
 
 #include "../coupling_helpers.hpp"
 #include "rigid_rain.hpp"

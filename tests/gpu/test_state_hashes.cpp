@@ -7,7 +7,7 @@
 #include "../state_hash.hpp"
 
 #include <drape/drape.hpp>
-#include <drape/rigid/coupled.hpp>
+#include <drape/coupling/rigid_world.hpp>
 
 #include <slope.hpp>
 

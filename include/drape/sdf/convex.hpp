@@ -11,8 +11,9 @@
 // ConvexHull&) (nothing: the hull is checked when it is built) are declared in drape/rigid/shapes.hpp.
 
 #include <drape/math.hpp>
-#include <drape/rigid/shapes.hpp>
 #include <drape/sdf/shapes.hpp>
+#include <drape/shapes/convex_hull.hpp>
+#include <drape/shapes/shapes.hpp>
 
 #include <algorithm>
 #include <cmath>

@@ -5,27 +5,12 @@
 // origin, so float keeps its precision far from the world origin.
 
 #include <drape/math.hpp>
+#include <drape/shapes/shapes.hpp>
 
 #include <algorithm>
 #include <string>
 
 namespace drape {
-
-/// The half-space below the solid frame's z = 0 plane; the outward normal is the frame's +z.
-struct Plane {};
-/// A ball centred on the solid frame's origin.
-struct Sphere {
-  double radius = 0.5;  ///< m
-};
-/// A box centred on the solid frame's origin, aligned with its axes.
-struct Box {
-  Eigen::Vector3d halfExtents{0.5, 0.5, 0.5};  ///< m
-};
-/// Points within `radius` of the segment from -halfHeight to +halfHeight along the solid frame's z axis.
-struct Capsule {
-  double radius = 0.1;      ///< m
-  double halfHeight = 0.5;  ///< m, half the length of the core segment
-};
 
 template <class Shape, Scalar S> struct Sdf;
 
@@ -106,22 +91,6 @@ template <Scalar S> struct Sdf<Capsule, S> {
 };
 
 namespace detail {
-
-inline void validateShape(const Plane&) {}
-inline void validateShape(const Sphere& s) {
-  require(std::isfinite(s.radius) && s.radius > 0, "sphere radius must be positive and finite (got " +
-                                                       std::to_string(s.radius) + ")");
-}
-inline void validateShape(const Box& b) {
-  require(detail::allFinite(b.halfExtents) && (b.halfExtents.array() > 0).all(),
-          "box half extents must be positive and finite");
-}
-inline void validateShape(const Capsule& c) {
-  require(std::isfinite(c.radius) && c.radius > 0, "capsule radius must be positive and finite (got " +
-                                                       std::to_string(c.radius) + ")");
-  require(std::isfinite(c.halfHeight) && c.halfHeight >= 0,
-          "capsule halfHeight must be non-negative and finite (got " + std::to_string(c.halfHeight) + ")");
-}
 
 /// Builds the Sdf of a shape placed by `pose`, relative to `origin`.
 template <Scalar S> Sdf<Plane, S> compileSdf(const Plane&, const Pose& pose, const Eigen::Vector3d& origin) {
