@@ -1,7 +1,8 @@
 #pragma once
 // Metrics of docs/design.md §10, with one definition shared by tests, samples and benches.
 
-#include <drape/solver.hpp>
+#include <drape/collision/pgd.hpp>
+#include <drape/front_end.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -34,7 +35,7 @@ struct PenetrationStats {
 };
 
 /// Vertices and the deepest point of every face (PGD with pgdIterations evaluations) against every solid.
-template <class Solver> PenetrationStats penetration(const Solver& solver, int pgdIterations = 64) {
+template <ClothSolver Solver> PenetrationStats penetration(const Solver& solver, int pgdIterations = 64) {
   using S = typename Solver::scalar_type;
   const auto& x = solver.state().x;
   const double thickness = solver.settings().thickness;
@@ -61,7 +62,7 @@ class TrembleMeter {
  public:
   explicit TrembleMeter(double marginFraction = 0.2) : marginFraction_(marginFraction) {}
 
-  template <class Solver> void frame(const Solver& solver, double dtFrame, bool record) {
+  template <ClothSolver Solver> void frame(const Solver& solver, double dtFrame, bool record) {
     using S = typename Solver::scalar_type;
     const Index n = solver.vertexCount();
     const double margin = solver.settings().thickness * (1.0 + marginFraction_);

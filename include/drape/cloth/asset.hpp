@@ -77,8 +77,6 @@ template <Scalar S> struct ClothAsset {
   DistanceSet<S> stretch;                        ///< structural edges
   DistanceSet<S> shear;                          ///< grid diagonals (empty for meshes)
   DistanceSet<S> bending;                        ///< bend pairs
-  Adjacency vertexFaces;                         ///< faces around each vertex
-  Adjacency vertexEdges;                         ///< edges around each vertex
   Adjacency vertexNeighbours;                    ///< vertices sharing an edge with each vertex
 
   Index vertexCount() const { return Index(restPositions.size()); }
@@ -167,33 +165,26 @@ void finishAsset(ClothAsset<S>& asset, const std::vector<std::array<Index, 2>>* 
   const Index nf = asset.faceCount();
   // Each undirected edge with the far vertices of the faces that share it.
   std::map<std::pair<Index, Index>, std::vector<Index>> edgeFaces;
-  std::vector<std::pair<Index, Index>> vf;
   asset.faceRestArea.resize(nf);
   for (Index f = 0; f < nf; ++f) {
     const auto& t = asset.triangles[f];
     for (int k = 0; k < 3; ++k) {
       const Index a = t[k], b = t[(k + 1) % 3], far = t[(k + 2) % 3];
       edgeFaces[{std::min(a, b), std::max(a, b)}].push_back(far);
-      vf.emplace_back(t[k], f);
     }
     const auto& x = asset.restPositions;
     asset.faceRestArea[f] = S(0.5) * (x[t[1]] - x[t[0]]).cross(x[t[2]] - x[t[0]]).norm();
   }
-  std::vector<std::pair<Index, Index>> ve, vv;
+  std::vector<std::pair<Index, Index>> vv;
   for (const auto& [edge, fars] : edgeFaces) {
     require(fars.size() <= 2, "edge (" + std::to_string(edge.first) + ", " + std::to_string(edge.second) +
                                   ") is shared by " + std::to_string(fars.size()) +
                                   " faces; the cloth mesh must be manifold (at most 2)");
-    const Index e = Index(asset.edges.size());
     asset.edges.push_back({edge.first, edge.second});
-    ve.emplace_back(edge.first, e);
-    ve.emplace_back(edge.second, e);
     vv.emplace_back(edge.first, edge.second);
     vv.emplace_back(edge.second, edge.first);
     if (fars.size() == 2 && fars[0] != fars[1]) asset.bendPairs.push_back({fars[0], fars[1]});
   }
-  asset.vertexFaces = buildAdjacency(nv, vf);
-  asset.vertexEdges = buildAdjacency(nv, ve);
   asset.vertexNeighbours = buildAdjacency(nv, vv);
   asset.stretch = colourDistanceSet<S>(nv, stretchPairs ? *stretchPairs : asset.edges, asset.restPositions);
   asset.shear = colourDistanceSet<S>(nv, shearPairs, asset.restPositions);
