@@ -14,11 +14,11 @@ namespace {
 using drape::Index;
 
 template <class S> std::shared_ptr<const drape::ClothAsset<S>> grid(int nx, int ny) {
-  drape::GridDesc g;
+  drape::SheetDesc g;
   g.nx = nx;
   g.ny = ny;
   g.spacing = 0.02;
-  return std::make_shared<const drape::ClothAsset<S>>(drape::ClothAsset<S>::grid(g));
+  return std::make_shared<const drape::ClothAsset<S>>(drape::ClothAsset<S>::sheet(g));
 }
 
 void perItem(benchmark::State& state, double items) {

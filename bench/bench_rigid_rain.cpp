@@ -2,9 +2,9 @@
 // one stepCoupled (the 50x80 cloth and the world, in the same substeps) against the number of bodies, on one
 // thread. Each repetition builds the scene (seed 42, all five shapes, the corners never let go), runs 50 steps
 // so the bodies are on or near the cloth, then times 100 steps; the median over the repetitions is reported.
-// Arguments: bodies, substeps per step, collision method (0 improved: vertex and face contacts, the default;
+// Arguments: bodies, substeps per step, collision method (0 faces: vertex and face contacts, the default;
 // 1 vertex: vertex contacts only, the thesis's method). The first series is the library's defaults (10
-// substeps, improved); the others measure what fewer substeps and vertex-only contacts save (the speed side of
+// substeps, faces); the others measure what fewer substeps and vertex-only contacts save (the speed side of
 // the trade; the accuracy side is the rain sample's, README "Cost per body").
 // At the end, for each series, a least-squares line ms = a + b N through the medians (b: the cost per body per
 // step; a: what is left at N = 0, to compare with the cloth alone, N = 0), and each count's cost per body over
@@ -34,7 +34,7 @@ void BM_RainOnCloth(benchmark::State& state) {
   c.release = std::numeric_limits<double>::infinity();  // the cloth stays up: the bodies keep on it
   c.base.threadCount = 1;
   c.subSteps = static_cast<int>(state.range(1));
-  c.base.collisionMethod = state.range(2) == 0 ? drape::CollisionMethod::Improved : drape::CollisionMethod::Vertex;
+  c.base.collisionMethod = state.range(2) == 0 ? drape::CollisionMethod::Faces : drape::CollisionMethod::Vertices;
   drape::scenes::RigidRain<float> scene(c);
   for (int s = 0; s < 50; ++s) scene.step();
   std::int64_t vertexContacts = 0, faceContacts = 0, facesTested = 0, facesCulled = 0, evaluations = 0, manifolds = 0,
@@ -100,7 +100,7 @@ class FitReporter : public benchmark::ConsoleReporter {
   }
 
  private:
-  using Series = std::pair<int, int>;  // substeps, method (0 improved, 1 vertex)
+  using Series = std::pair<int, int>;  // substeps, method (0 faces, 1 vertices)
 
   static void fit(const Series& key, const std::map<int, double>& ms) {
     if (ms.size() < 2) return;

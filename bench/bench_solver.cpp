@@ -37,7 +37,7 @@ template <class S, drape::CollisionMethod kMethod> void slopeStep(benchmark::Sta
 
 void slopeSize(benchmark::State& state) {
   const int side = int(state.range(0));
-  runSlope<float>(state, drape::CollisionMethod::Improved, 5, 1, side == 50 ? 50 : side, side == 50 ? 80 : side,
+  runSlope<float>(state, drape::CollisionMethod::Faces, 5, 1, side == 50 ? 50 : side, side == 50 ? 80 : side,
                   int(state.range(1)));
 }
 
@@ -46,10 +46,10 @@ void substepsAndIterations(benchmark::internal::Benchmark* b) {
 }
 
 using drape::CollisionMethod;
-BENCHMARK(slopeStep<float, CollisionMethod::Improved>)->Apply(substepsAndIterations);
-BENCHMARK(slopeStep<float, CollisionMethod::Baseline>)->Apply(substepsAndIterations);
-BENCHMARK(slopeStep<float, CollisionMethod::Vertex>)->Apply(substepsAndIterations);
-BENCHMARK(slopeStep<double, CollisionMethod::Improved>)->Apply(substepsAndIterations);
+BENCHMARK(slopeStep<float, CollisionMethod::Faces>)->Apply(substepsAndIterations);
+BENCHMARK(slopeStep<float, CollisionMethod::InSolve>)->Apply(substepsAndIterations);
+BENCHMARK(slopeStep<float, CollisionMethod::Vertices>)->Apply(substepsAndIterations);
+BENCHMARK(slopeStep<double, CollisionMethod::Faces>)->Apply(substepsAndIterations);
 // side 50 means the 50x80 cloth; threads 1 or 2. Real time: with two threads, CPU time would count both.
 BENCHMARK(slopeSize)
     ->ArgNames({"side", "threads"})

@@ -17,7 +17,7 @@ set grid xtics ytics mxtics mytics lc rgb "#dddddd"
 set key top right box opaque font "sans,9" spacing 0.9
 set xlabel "ms per frame (dt 1/60 s, 651 vertices, one thread)"
 
-groups = "improved/float improved/double baseline/float vertex/float improved/float/pgd<12"
+groups = "faces/float faces/double in-solve/float vertices/float faces/float/pgd<12"
 gcolour(i) = word("#1f77b4 #9467bd #d62728 #2ca02c #ff7f0e", i)
 gpoint(i) = int(word("7 5 9 11 13", i))
 

@@ -20,14 +20,14 @@ stats() { sort -g | awk '{ v[NR] = $1 } END { m = NR % 2 ? v[(NR + 1) / 2] : (v[
 
 echo "| substeps | contacts | ms per step | bodies through the cloth at the release (of 80) | deepest cloth vertex in a body, mm | largest strain at the end |"
 echo "|---|---|---|---|---|---|"
-for series in "10 improved" "10 vertex" "5 improved" "2 improved" "1 improved" "2 vertex" "1 vertex"; do
+for series in "10 faces" "10 vertices" "5 faces" "2 faces" "1 faces" "2 vertices" "1 vertices"; do
   set -- $series
   out=$(for seed in "${seeds[@]}"; do
     "$sample" --bodies 80 --seed "$seed" --substeps "$1" --method "$2" --steps 200 --json 2> /dev/null |
       jq -r '[.ms_per_step, .bodies_through_cloth_at_release, .max_penetration * 1000, .final_max_strain] | @tsv'
   done)
   col() { cut -f "$1" <<< "$out" | stats; }
-  contacts=$([ "$2" = vertex ] && echo "vertex only" || echo "vertex and face")
+  contacts=$([ "$2" = vertices ] && echo "vertex only" || echo "vertex and face")
   echo "| $1 | $contacts | $(col 1) | $(col 2) | $(col 3) | $(col 4) |"
 done
 echo

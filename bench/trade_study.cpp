@@ -14,17 +14,17 @@
 //            run's positions; penetration of vertices and faces (PGD, 64 evaluations) at every frame's end.
 //            Once the cloth touches the ball, stick/slip and folding make the trajectory sensitive: the check
 //            row (below) gives the error floor this metric can resolve.
-// Reference (hanging, drop): double, 1000 substeps, 2 iterations, improved, PGD 12, same dt. A check row
+// Reference (hanging, drop): double, 1000 substeps, 2 iterations, faces, PGD 12, same dt. A check row
 // (double, 500 substeps, same iterations) shows how far the reference itself is from converged. The slope's
 // answer is analytic, so it has no reference or check run (a 1000-substep slope run would double the study).
 //
 // Design: the full factorial (6 x 4 x 2 x 3 x 4 = 576 per scene) is too big; instead, around the default
-// (float, improved, 10 substeps, 1 iteration, PGD 12):
-//   grid    substeps {1, 2, 5, 10, 20, 50} x iterations {1, 2, 5, 10}    (float, improved, PGD 12)   24
-//   method  {baseline, vertex} x substeps {1, 2, 5, 10, 20, 50}          (float, 1 iteration, PGD 12) 12
-//   scalar  double x substeps {1, 2, 5, 10, 20, 50}                      (improved, 1 iteration, PGD 12) 6
-//   pgd     PGD {1, 2, 4} x substeps {2, 10}                             (float, improved, 1 iteration) 6
-// so every listed value of every axis appears (improved, float and PGD 12 through the grid), each axis is
+// (float, faces, 10 substeps, 1 iteration, PGD 12):
+//   grid    substeps {1, 2, 5, 10, 20, 50} x iterations {1, 2, 5, 10}    (float, faces, PGD 12)   24
+//   method  {in-solve, vertices} x substeps {1, 2, 5, 10, 20, 50}          (float, 1 iteration, PGD 12) 12
+//   scalar  double x substeps {1, 2, 5, 10, 20, 50}                      (faces, 1 iteration, PGD 12) 6
+//   pgd     PGD {1, 2, 4} x substeps {2, 10}                             (float, faces, 1 iteration) 6
+// so every listed value of every axis appears (faces, float and PGD 12 through the grid), each axis is
 // crossed with substeps, and substeps are crossed with iterations: 48 configurations on each of the 3 scenes.
 // The hanging cloth touches no solid, so its method and PGD rows repeat the default's computation, and the
 // slope is a plane (no face pass), so its PGD rows do too: they are listed (axis_applies 0) but left out of the
@@ -94,7 +94,7 @@ double median(std::vector<double> v) {
 
 struct Config {
   bool dbl = false;
-  CollisionMethod method = CollisionMethod::Improved;
+  CollisionMethod method = CollisionMethod::Faces;
   int substeps = 10, iterations = 1, pgd = 12;
   std::string sweeps;          // the parts of the design that include it, ';'-separated
   std::string role = "sweep";  // sweep, reference or check
@@ -110,7 +110,7 @@ struct Config {
   }
   std::string label() const {
     std::string s = std::to_string(substeps) + "x" + std::to_string(iterations);
-    if (method != CollisionMethod::Improved) s += std::string(" ") + drape::toString(method);
+    if (method != CollisionMethod::Faces) s += std::string(" ") + drape::toString(method);
     if (dbl) s += " dbl";
     if (pgd != 12) s += " pgd" + std::to_string(pgd);
     return s;
@@ -147,24 +147,24 @@ std::vector<Config> design(bool quick, const Config& reference, const Config& ch
       }
     out.push_back(c);
   };
-  const CollisionMethod improved = CollisionMethod::Improved;
+  const CollisionMethod faces = CollisionMethod::Faces;
   if (quick) {
-    for (int s : {2, 10}) add(make(false, improved, s, 1, 12), "grid");
-    add(make(false, CollisionMethod::Vertex, 10, 1, 12), "method");
-    add(make(false, CollisionMethod::Baseline, 10, 1, 12), "method");
-    add(make(true, improved, 10, 1, 12), "scalar");
-    add(make(false, improved, 10, 1, 2), "pgd");
+    for (int s : {2, 10}) add(make(false, faces, s, 1, 12), "grid");
+    add(make(false, CollisionMethod::Vertices, 10, 1, 12), "method");
+    add(make(false, CollisionMethod::InSolve, 10, 1, 12), "method");
+    add(make(true, faces, 10, 1, 12), "scalar");
+    add(make(false, faces, 10, 1, 2), "pgd");
   } else {
     const int substeps[] = {1, 2, 5, 10, 20, 50};
     for (int s : substeps)
-      for (int i : {1, 2, 5, 10}) add(make(false, improved, s, i, 12), "grid");
-    for (auto m : {CollisionMethod::Baseline, CollisionMethod::Vertex})
+      for (int i : {1, 2, 5, 10}) add(make(false, faces, s, i, 12), "grid");
+    for (auto m : {CollisionMethod::InSolve, CollisionMethod::Vertices})
       for (int s : substeps) add(make(false, m, s, 1, 12), "method");
-    for (int s : substeps) add(make(false, improved, s, 1, 12), "method");
-    for (int s : substeps) add(make(true, improved, s, 1, 12), "scalar");
-    for (int s : substeps) add(make(false, improved, s, 1, 12), "scalar");
+    for (int s : substeps) add(make(false, faces, s, 1, 12), "method");
+    for (int s : substeps) add(make(true, faces, s, 1, 12), "scalar");
+    for (int s : substeps) add(make(false, faces, s, 1, 12), "scalar");
     for (int s : {2, 10})
-      for (int p : {1, 2, 4, 12}) add(make(false, improved, s, 1, p), "pgd");
+      for (int p : {1, 2, 4, 12}) add(make(false, faces, s, 1, p), "pgd");
   }
   add(reference, "reference");
   if (check.substeps > 0) add(check, "check");
@@ -364,7 +364,7 @@ Row dropRow(const Scenes& sc, const Config& cfg, const References* ref, scenes::
 /// default's computation (the hanging cloth touches no solid: method and PGD do nothing; the slope is a plane,
 /// whose face pass is skipped: PGD does nothing). Such rows stay in the tables but not in fronts or plots.
 bool axisApplies(const Row& r) {
-  if (r.scene == "hanging") return r.cfg.method == CollisionMethod::Improved && r.cfg.pgd == 12;
+  if (r.scene == "hanging") return r.cfg.method == CollisionMethod::Faces && r.cfg.pgd == 12;
   if (r.scene == "slope") return r.cfg.pgd == 12;
   return true;
 }
@@ -553,7 +553,7 @@ std::vector<Feature> featureCosts(const Scenes& sc, bool quick) {
   const int pairs = quick ? 3 : 11;
   const double blockMs = quick ? 2 : 10;  // short blocks: the two variants' states diverge less within one
   std::vector<Feature> out;
-  Config def;  // float, improved, 10 x 1, PGD 12
+  Config def;  // float, faces, 10 x 1, PGD 12
   const double dt = 1.0 / 60.0;
   auto settle = [&](auto& s, int frames) {
     for (int f = 0; f < frames; ++f) s.step(dt);
@@ -597,14 +597,14 @@ std::vector<Feature> featureCosts(const Scenes& sc, bool quick) {
       };
     };
     auto same = [](scenes::DropConfig&) {};
-    out.push_back(pairedCost({"face contacts + propagation (improved vs vertex)", "drop (ball)",
-                              "method improved", "method vertex"},
+    out.push_back(pairedCost({"face contacts + propagation (faces vs vertices)", "drop (ball)",
+                              "method faces", "method vertices"},
                              snap, dt, pairs, blockMs, with(same),
-                             with([](scenes::DropConfig& d) { d.base.collisionMethod = CollisionMethod::Vertex; })));
+                             with([](scenes::DropConfig& d) { d.base.collisionMethod = CollisionMethod::Vertices; })));
     out.push_back(pairedCost(
-        {"face contacts (PGD) alone", "drop (ball)", "method improved, propagationRings 0", "method vertex"}, snap, dt,
+        {"face contacts (PGD) alone", "drop (ball)", "method faces, propagationRings 0", "method vertices"}, snap, dt,
         pairs, blockMs, with([](scenes::DropConfig& d) { d.base.propagationRings = 0; }),
-        with([](scenes::DropConfig& d) { d.base.collisionMethod = CollisionMethod::Vertex; })));
+        with([](scenes::DropConfig& d) { d.base.collisionMethod = CollisionMethod::Vertices; })));
     out.push_back(pairedCost({"propagation", "drop (ball)", "propagationRings 1", "propagationRings 0"}, snap, dt, pairs,
                              blockMs, with(same),
                              with([](scenes::DropConfig& d) { d.base.propagationRings = 0; })));
@@ -697,8 +697,8 @@ int main(int argc, char** argv) {
     const std::filesystem::path dir(out);
     std::filesystem::create_directories(dir);
     const Scenes sc = makeScenes(quick);
-    const Config reference = make(true, CollisionMethod::Improved, quick ? 100 : 1000, quick ? 1 : 2, 12, "reference");
-    const Config check = make(true, CollisionMethod::Improved, quick ? 0 : 500, reference.iterations, 12, "check");
+    const Config reference = make(true, CollisionMethod::Faces, quick ? 100 : 1000, quick ? 1 : 2, 12, "reference");
+    const Config check = make(true, CollisionMethod::Faces, quick ? 0 : 500, reference.iterations, 12, "check");
     std::vector<Config> configs = design(quick, reference, check);
     if (!only.empty())
       std::erase_if(configs, [&](const Config& c) { return c.role == "sweep" && c.label().find(only) == std::string::npos; });
@@ -770,13 +770,13 @@ int main(int argc, char** argv) {
         << "Generated by `bench/trade_study" << (quick ? " --quick" : "") << "` (see its header comment for the "
         << "design) from commit " << (commit.empty() ? "unknown" : commit)
         << (dirty.empty() ? "" : " with uncommitted changes under include/") << "; the sweep took "
-        << num(studySeconds, 3) << " s on this machine. Cloth 21 x 31 vertices (651), dt 1/60 s, single thread. "
+        << num(studySeconds, 3) << " s on the machine that ran it. Cloth 21 x 31 vertices (651), dt 1/60 s, single thread. "
         << "Cost: median of " << sc.reps << " timed blocks of frames from the scene's end state. "
         << "Errors: hanging against the reference run (double, " << reference.substeps << " substeps x "
         << reference.iterations << " iterations); slope against g (sin 30° - 0.3 cos 30°) = "
         << num(9.81 * (0.5 - 0.3 * std::sqrt(3.0) / 2), 5) << " m/s², creep with μ 0.8 (the answer is 0); drop "
         << "against the reference run. Plot: trade.png; Pareto fronts: trade_pareto_<panel>.csv; feature costs: "
-        << "trade_features.md. Load average (1, 5, 15 min) on this shared 2-core machine at the start: "
+        << "trade_features.md. Load average (1, 5, 15 min) at the start: "
         << loadBefore << ", at the end: " << shell("cut -d' ' -f1-3 /proc/loadavg 2>/dev/null")
         << " (other jobs share the cores, so costs carry their noise).\n";
     writeMarkdown(dir / "trade.md", rows, fronts, pre.str());

@@ -42,12 +42,12 @@ struct DropResult {
 template <Scalar S, class SolverT = Solver<S>> SolverT makeDrop(const DropConfig& c) {
   detail::require(c.nx >= 2 && c.ny >= 2, "nx and ny must be >= 2");
   detail::require(c.frames >= 1 && c.sampleEvery >= 1, "frames and sampleEvery must be >= 1");
-  GridDesc grid;
+  SheetDesc grid;
   grid.nx = c.nx;
   grid.ny = c.ny;
   grid.spacing = c.spacing;
   grid.placement.position = Eigen::Vector3d(0, 0, c.height);
-  auto asset = std::make_shared<const ClothAsset<S>>(ClothAsset<S>::grid(grid));
+  auto asset = std::make_shared<const ClothAsset<S>>(ClothAsset<S>::sheet(grid));
   Settings s = c.base;
   s.subStepCount = c.subSteps;
   s.iterationCount = c.iterations;

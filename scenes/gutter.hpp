@@ -1,7 +1,7 @@
 #pragma once
 // A cloth folded into a V gutter of two frictionless planes (walls at `wallDeg` from horizontal), laid in
 // 1 mm above the thickness and left to settle. The fold line touches both walls at once: this is where the
-// baseline (contacts inside the solve) keeps trembling and the improved method settles (the SDF collision
+// in-solve method keeps trembling and the faces method settles (the SDF collision
 // paper's claim, docs/design.md §4).
 
 #include <drape/drape.hpp>
@@ -34,11 +34,11 @@ struct GutterResult {
 
 /// The solver with the two walls and the cloth folded into the V.
 template <Scalar S> Solver<S> makeGutter(const GutterConfig& c) {
-  GridDesc grid;
+  SheetDesc grid;
   grid.nx = c.nx;
   grid.ny = c.ny;
   grid.spacing = c.spacing;
-  auto asset = std::make_shared<const ClothAsset<S>>(ClothAsset<S>::grid(grid));
+  auto asset = std::make_shared<const ClothAsset<S>>(ClothAsset<S>::sheet(grid));
   Solver<S> solver(asset, c.settings);
   const double wall = c.wallDeg * std::numbers::pi / 180.0;
   for (int side : {1, -1}) {

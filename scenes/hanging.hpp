@@ -51,14 +51,14 @@ template <Scalar S, class SolverT = Solver<S>> SolverT makeHanging(const Hanging
   detail::require(c.nx >= 2 && c.ny >= 2, "nx and ny must be >= 2");
   detail::require(c.frames >= 1, "frames must be >= 1");
   detail::require(c.damping >= 0 && c.damping < 1, "damping must be in [0, 1)");
-  GridDesc grid;
+  SheetDesc grid;
   grid.nx = c.nx;
   grid.ny = c.ny;
   grid.spacing = c.spacing;
   grid.placement.position = Eigen::Vector3d(0, 0, c.height);
   AssetOptions options;
   options.bending = c.bending;
-  auto asset = std::make_shared<const ClothAsset<S>>(ClothAsset<S>::grid(grid, options));
+  auto asset = std::make_shared<const ClothAsset<S>>(ClothAsset<S>::sheet(grid, options));
   Settings s = c.base;
   s.subStepCount = c.subSteps;
   s.iterationCount = c.iterations;

@@ -46,7 +46,7 @@ struct BrickResult {
 };
 
 template <Scalar S> BrickResult runHeavyBrick(const BrickConfig& c) {
-  GridDesc grid;
+  SheetDesc grid;
   grid.nx = c.nx;
   grid.ny = c.ny;
   grid.spacing = c.spacing;
@@ -55,7 +55,7 @@ template <Scalar S> BrickResult runHeavyBrick(const BrickConfig& c) {
   settings.iterationCount = c.iterations;
   const double thickness = settings.thickness;
   grid.placement.position = {0, 0, thickness};
-  auto asset = std::make_shared<const ClothAsset<S>>(ClothAsset<S>::grid(grid));
+  auto asset = std::make_shared<const ClothAsset<S>>(ClothAsset<S>::sheet(grid));
   Solver<S> cloth(asset, settings);
   Solid<Plane> floor;
   floor.staticFriction = floor.dynamicFriction = c.friction;

@@ -248,12 +248,12 @@ template <Scalar S, class ClothSolver = Solver<S>> class RigidRain {
 
  private:
   static std::shared_ptr<const ClothAsset<S>> makeAsset(const RainConfig& c) {
-    GridDesc grid;
+    SheetDesc grid;
     grid.nx = c.nx;
     grid.ny = c.ny;
     grid.spacing = c.spacing;
     grid.placement.position = Eigen::Vector3d(0, 0, c.clothHeight);
-    return std::make_shared<const ClothAsset<S>>(ClothAsset<S>::grid(grid));
+    return std::make_shared<const ClothAsset<S>>(ClothAsset<S>::sheet(grid));
   }
   static Settings clothSettings(const RainConfig& c) {
     Settings s = c.base;

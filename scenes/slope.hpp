@@ -25,7 +25,7 @@ struct SlopeConfig {
   double dt = 1.0 / 60.0;  ///< s per frame
   int nx = 50, ny = 80;
   double spacing = 0.02;  ///< m
-  CollisionMethod method = CollisionMethod::Improved;
+  CollisionMethod method = CollisionMethod::Faces;
   double gap = 0.05;           ///< m, vertical gap between the cloth's uphill edge and the slope at the start
   double areaDensity = 0.1;    ///< kg/m^2
   double windowStart = 0.5;    ///< metrics use frames from this fraction of the run to its end
@@ -71,14 +71,14 @@ template <Scalar S> SlopeParts<S> slopeParts(const SlopeConfig& c) {
   detail::require(c.nx >= 2 && c.ny >= 2, "nx and ny must be >= 2");
   detail::requireRange(c.friction, 0, 100, "friction");
   const double theta = c.angleDeg * std::numbers::pi / 180.0;
-  GridDesc grid;
+  SheetDesc grid;
   grid.nx = c.nx;
   grid.ny = c.ny;
   grid.spacing = c.spacing;
   const double halfY = 0.5 * (c.ny - 1) * c.spacing;
   grid.placement.position = Eigen::Vector3d(0, 0, halfY * std::tan(theta) + c.gap);
   SlopeParts<S> parts;
-  parts.asset = std::make_shared<const ClothAsset<S>>(ClothAsset<S>::grid(grid));
+  parts.asset = std::make_shared<const ClothAsset<S>>(ClothAsset<S>::sheet(grid));
   parts.settings = c.base;
   parts.settings.subStepCount = c.subSteps;
   parts.settings.iterationCount = c.iterations;

@@ -1,4 +1,4 @@
-// The baseline method's friction (the CPU twin: applyContactFriction in include/drape/collision/response.hpp):
+// The in-solve method's friction (the CPU twin: applyContactFriction in include/drape/collision/response.hpp):
 // inside the solve, after each pass's contacts, Coulomb friction on the positions of every contact vertex for
 // each surface it touches (applyPositionFriction), relative to where the vertex started the substep.
 layout(local_size_x = DRAPE_WORKGROUP) in;

@@ -11,11 +11,11 @@ namespace drape::test {
 
 /// An n x n grid cloth, `spacing` apart, at height z.
 template <class S> std::shared_ptr<const ClothAsset<S>> squareCloth(int n, double spacing, double z) {
-  GridDesc grid;
+  SheetDesc grid;
   grid.nx = grid.ny = n;
   grid.spacing = spacing;
   grid.placement.position = {0, 0, z};
-  return std::make_shared<const ClothAsset<S>>(ClothAsset<S>::grid(grid));
+  return std::make_shared<const ClothAsset<S>>(ClothAsset<S>::sheet(grid));
 }
 
 /// The cloth's linear momentum (kg m/s): its free vertices' masses times their velocities.

@@ -25,11 +25,11 @@ template <class S> void requireValidColouring(const drape::DistanceSet<S>& set, 
 }  // namespace
 
 TEMPLATE_TEST_CASE("a grid asset has the expected topology and a valid colouring", "[asset]", float, double) {
-  drape::GridDesc g;
+  drape::SheetDesc g;
   g.nx = 7;
   g.ny = 5;
   g.spacing = 0.1;
-  const auto a = drape::ClothAsset<TestType>::grid(g);
+  const auto a = drape::ClothAsset<TestType>::sheet(g);
   const int nx = 7, ny = 5;
   CHECK(a.vertexCount() == nx * ny);
   CHECK(a.faceCount() == 2 * (nx - 1) * (ny - 1));
@@ -56,11 +56,11 @@ TEMPLATE_TEST_CASE("a grid asset has the expected topology and a valid colouring
 }
 
 TEMPLATE_TEST_CASE("vertex masses come from the area density", "[asset]", float, double) {
-  drape::GridDesc g;
+  drape::SheetDesc g;
   g.nx = 11;
   g.ny = 6;
   g.spacing = 0.02;
-  const auto a = drape::ClothAsset<TestType>::grid(g);
+  const auto a = drape::ClothAsset<TestType>::sheet(g);
   const auto s = drape::ClothState<TestType>::fromAsset(a, 0.25);
   double total = 0;
   for (auto w : s.invMass) total += 1.0 / double(w);
@@ -82,11 +82,11 @@ TEMPLATE_TEST_CASE("a mesh asset colours every edge and finds bend pairs", "[ass
 }
 
 TEST_CASE("a float cloth placed 20 km from the origin keeps exact rest lengths and positions", "[asset]") {
-  drape::GridDesc g;
+  drape::SheetDesc g;
   g.nx = g.ny = 5;
   g.spacing = 0.02;
   g.placement.position = {1e4, -2e4, 5e3};
-  const auto asset = std::make_shared<const drape::ClothAsset<float>>(drape::ClothAsset<float>::grid(g));
+  const auto asset = std::make_shared<const drape::ClothAsset<float>>(drape::ClothAsset<float>::sheet(g));
   for (drape::Index k = 0; k < asset->stretch.size(); ++k) CHECK(asset->stretch.restLength[k] == Approx(0.02).epsilon(1e-6));
   drape::Solver<float> solver(asset);
   CHECK((solver.position(0) - Eigen::Vector3d(1e4 - 0.04, -2e4 - 0.04, 5e3)).norm() < 1e-6);

@@ -24,14 +24,14 @@ template <class S> bool inGrownBox(const drape::Vec3<S>& p, const drape::Vec3<S>
 /// A 40 x 40 cloth falling onto a floor and five bounded solids of every convex kind, one of them a box
 /// sweeping sideways through the cloth at 3 m/s (it drags vertices far from where they were binned).
 template <class S> drape::Solver<S> crowdedScene(bool broadPhase, int threads) {
-  drape::GridDesc grid;
+  drape::SheetDesc grid;
   grid.nx = grid.ny = 40;
   grid.spacing = 0.02;
   grid.placement.position = {0.001, -0.002, 0.25};
   drape::Settings settings;
   settings.broadPhase = broadPhase;
   settings.threadCount = threads;
-  drape::Solver<S> cloth(std::make_shared<const drape::ClothAsset<S>>(drape::ClothAsset<S>::grid(grid)), settings);
+  drape::Solver<S> cloth(std::make_shared<const drape::ClothAsset<S>>(drape::ClothAsset<S>::sheet(grid)), settings);
   drape::Solid<drape::Plane> floor;
   floor.staticFriction = floor.dynamicFriction = 0.4;
   cloth.addSolid(floor);
@@ -85,13 +85,13 @@ TEMPLATE_TEST_CASE("the cloth grid finds exactly the vertices in a box, and ever
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> u(-1, 1);
   // A crumpled 30 x 30 cloth: grid topology, random positions in a 0.6 m cube.
-  drape::GridDesc desc;
+  drape::SheetDesc desc;
   desc.nx = desc.ny = 30;
-  const auto asset = drape::ClothAsset<S>::grid(desc);
+  const auto asset = drape::ClothAsset<S>::sheet(desc);
   const drape::Index n = asset.vertexCount();
   std::vector<V> x(static_cast<std::size_t>(n));
   for (auto& p : x) p = V(S(0.3 * u(rng)), S(0.3 * u(rng)), S(0.1 * u(rng)));
-  drape::ClothGrid<S> grid;
+  drape::VertexBins<S> grid;
   grid.setTopology(asset.triangles, n, S(0.04));
   grid.build(x.data(), asset.triangles);
   std::vector<drape::Index> found;

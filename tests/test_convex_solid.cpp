@@ -18,11 +18,11 @@ std::vector<Eigen::Vector3d> boxCorners(const Eigen::Vector3d& half) {
 }
 
 template <class S, class Shape> drape::Solver<S> dropOn(const drape::Solid<Shape>& solid) {
-  drape::GridDesc grid;
+  drape::SheetDesc grid;
   grid.nx = grid.ny = 15;
   grid.spacing = 0.02;
   grid.placement.position = {0.003, -0.002, 0.1};
-  drape::Solver<S> cloth(std::make_shared<const drape::ClothAsset<S>>(drape::ClothAsset<S>::grid(grid)));
+  drape::Solver<S> cloth(std::make_shared<const drape::ClothAsset<S>>(drape::ClothAsset<S>::sheet(grid)));
   cloth.addSolid(solid);
   return cloth;
 }

@@ -166,11 +166,11 @@ TEMPLATE_TEST_CASE("a ball on a cloth lying on the floor is held by it, and a sp
     drape::Settings settings;
     settings.thickness = thickness;
     settings.threadCount = 1;
-    drape::GridDesc grid;
+    drape::SheetDesc grid;
     grid.nx = grid.ny = 30;
     grid.spacing = 0.01;
     grid.placement.position = {0, 0, thickness};
-    drape::Solver<S> cloth(std::make_shared<const drape::ClothAsset<S>>(drape::ClothAsset<S>::grid(grid)), settings,
+    drape::Solver<S> cloth(std::make_shared<const drape::ClothAsset<S>>(drape::ClothAsset<S>::sheet(grid)), settings,
                            0.1);
     drape::Solid<drape::Plane> floor;
     floor.staticFriction = floor.dynamicFriction = 0.5;

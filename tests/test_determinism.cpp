@@ -46,11 +46,11 @@ constexpr drape::Index kNudged = 37;  ///< the vertex the perturbed scene moves
 /// moves up by one ulp of S (exactly: the test checks it), so the scene differs from the plain one in one bit
 /// pattern.
 template <class S> std::unique_ptr<drape::Solver<S>> makeScene(const drape::Settings& settings, bool nudge = false) {
-  drape::GridDesc grid;
+  drape::SheetDesc grid;
   grid.nx = grid.ny = 30;
   grid.spacing = 0.02;
   grid.placement.position = {0.03, 0.01, 0.4};
-  auto asset = std::make_shared<const drape::ClothAsset<S>>(drape::ClothAsset<S>::grid(grid));
+  auto asset = std::make_shared<const drape::ClothAsset<S>>(drape::ClothAsset<S>::sheet(grid));
   auto solver = std::make_unique<drape::Solver<S>>(asset, settings);
   drape::Solid<drape::Sphere> ball;
   ball.shape.radius = 0.15;
@@ -87,7 +87,7 @@ TEMPLATE_TEST_CASE("the same scene run twice from scratch ends in bit-identical 
                    double) {
   drape::Settings settings;  // 10 substeps, 1 iteration
   settings.collisionMethod =
-      GENERATE(drape::CollisionMethod::Improved, drape::CollisionMethod::Baseline, drape::CollisionMethod::Vertex);
+      GENERATE(drape::CollisionMethod::Faces, drape::CollisionMethod::InSolve, drape::CollisionMethod::Vertices);
   INFO("method " << drape::toString(settings.collisionMethod));
 
   // The run does something worth hashing: by the end the cloth lies on the ball and its corners on the floor.
@@ -140,7 +140,7 @@ TEMPLATE_TEST_CASE("two threads give the bit-identical state of one thread", "[d
   // the split between threads cannot change a single bit.
   if (!drape::threadsAvailable()) WARN("drape was built without OpenMP: threadCount 2 runs on one thread here");
   for (const auto method :
-       {drape::CollisionMethod::Improved, drape::CollisionMethod::Baseline, drape::CollisionMethod::Vertex}) {
+       {drape::CollisionMethod::Faces, drape::CollisionMethod::InSolve, drape::CollisionMethod::Vertices}) {
     drape::Settings one;
     one.collisionMethod = method;
     one.iterationCount = 2;  // the multipliers are live too

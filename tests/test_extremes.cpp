@@ -64,11 +64,11 @@ template <class Solver> void runFor(Solver& solver, double dt, double seconds, W
 }
 
 template <class S> std::shared_ptr<const drape::ClothAsset<S>> gridAsset(int n, double spacing, const V3& at) {
-  drape::GridDesc grid;
+  drape::SheetDesc grid;
   grid.nx = grid.ny = n;
   grid.spacing = spacing;
   grid.placement.position = at;
-  return std::make_shared<const drape::ClothAsset<S>>(drape::ClothAsset<S>::grid(grid));
+  return std::make_shared<const drape::ClothAsset<S>>(drape::ClothAsset<S>::sheet(grid));
 }
 
 }  // namespace
@@ -82,7 +82,7 @@ TEMPLATE_TEST_CASE("a cloth thrown at 50 m/s does not tunnel through a plane or 
   using S = TestType;
   constexpr int n = 20;
   const double speed = 50;
-  drape::Settings settings;  // defaults: 10 substeps, 1 iteration, improved contacts, thickness 5 mm
+  drape::Settings settings;  // defaults: 10 substeps, 1 iteration, face contacts, thickness 5 mm
   SECTION("a plane, hit at 50 m/s and 30 degrees off its normal") {
     auto solver = drape::Solver<S>(gridAsset<S>(n, 0.02, V3(0, 0, 0.5)), settings);
     drape::Solid<drape::Plane> floor;

@@ -88,8 +88,8 @@ template <class S> Mesh<S> unitSquare() {
   return {{V(0, 0, 0), V(1, 0, 0), V(1, 1, 0), V(0, 1, 0)}, {{{0, 1, 2}}, {{0, 2, 3}}}};
 }
 
-drape::GridDesc smallGridDesc() {
-  drape::GridDesc g;
+drape::SheetDesc smallSheetDesc() {
+  drape::SheetDesc g;
   g.nx = 4;
   g.ny = 4;
   g.spacing = 0.1;
@@ -98,7 +98,7 @@ drape::GridDesc smallGridDesc() {
 }
 
 template <class S> std::shared_ptr<const drape::ClothAsset<S>> smallGrid() {
-  return std::make_shared<const drape::ClothAsset<S>>(drape::ClothAsset<S>::grid(smallGridDesc()));
+  return std::make_shared<const drape::ClothAsset<S>>(drape::ClothAsset<S>::sheet(smallSheetDesc()));
 }
 
 /// Everything observable about a solver's cloth, pins and solid count, in world units.
@@ -341,65 +341,65 @@ TEMPLATE_TEST_CASE("a solver rejects a mesh vertex that belongs to no face", "[i
 
 TEMPLATE_TEST_CASE("grid rejects too few vertices", "[input]", float, double) {
   using Asset = drape::ClothAsset<TestType>;
-  REQUIRE_NOTHROW(Asset::grid(smallGridDesc()));
+  REQUIRE_NOTHROW(Asset::sheet(smallSheetDesc()));
   for (drape::Index n : {1, 0, -3}) {
     CAPTURE(n);
-    auto g = smallGridDesc();
+    auto g = smallSheetDesc();
     g.nx = n;
-    CHECK_REJECTS(Asset::grid(g), "nx >= 2");
-    g = smallGridDesc();
+    CHECK_REJECTS(Asset::sheet(g), "nx >= 2");
+    g = smallSheetDesc();
     g.ny = n;
-    CHECK_REJECTS(Asset::grid(g), "ny >= 2");
+    CHECK_REJECTS(Asset::sheet(g), "ny >= 2");
   }
-  auto huge = smallGridDesc();
+  auto huge = smallSheetDesc();
   huge.nx = 100000;
   huge.ny = 100000;
-  CHECK_REJECTS(Asset::grid(huge), "too large");
+  CHECK_REJECTS(Asset::sheet(huge), "too large");
 }
 
 TEMPLATE_TEST_CASE("grid rejects a bad spacing", "[input]", float, double) {
   using Asset = drape::ClothAsset<TestType>;
   for (double spacing : {0.0, -0.0, -0.1, kNaN, kInf, -kInf}) {
     CAPTURE(spacing);
-    auto g = smallGridDesc();
+    auto g = smallSheetDesc();
     g.spacing = spacing;
-    CHECK_REJECTS(Asset::grid(g), "spacing");
+    CHECK_REJECTS(Asset::sheet(g), "spacing");
   }
 }
 
 TEMPLATE_TEST_CASE("grid rejects a bad placement", "[input]", float, double) {
   using Asset = drape::ClothAsset<TestType>;
   SECTION("non-unit quaternion") {
-    auto g = smallGridDesc();
+    auto g = smallSheetDesc();
     g.placement.rotation = Eigen::Quaterniond(2, 0, 0, 0);
-    CHECK_REJECTS(Asset::grid(g), "unit quaternion");
+    CHECK_REJECTS(Asset::sheet(g), "unit quaternion");
     g.placement.rotation = Eigen::Quaterniond(0.5, 0.5, 0.5, 0.4);
-    CHECK_REJECTS(Asset::grid(g), "unit quaternion");
+    CHECK_REJECTS(Asset::sheet(g), "unit quaternion");
   }
   SECTION("zero quaternion") {
-    auto g = smallGridDesc();
+    auto g = smallSheetDesc();
     g.placement.rotation = Eigen::Quaterniond(0, 0, 0, 0);
-    CHECK_REJECTS(Asset::grid(g), "unit quaternion");
+    CHECK_REJECTS(Asset::sheet(g), "unit quaternion");
   }
   SECTION("NaN quaternion") {
-    auto g = smallGridDesc();
+    auto g = smallSheetDesc();
     g.placement.rotation = Eigen::Quaterniond(kNaN, 0, 0, 0);
-    CHECK_REJECTS(Asset::grid(g), "finite");
+    CHECK_REJECTS(Asset::sheet(g), "finite");
   }
   SECTION("infinite quaternion") {
-    auto g = smallGridDesc();
+    auto g = smallSheetDesc();
     g.placement.rotation = Eigen::Quaterniond(1, kInf, 0, 0);
-    CHECK_REJECTS(Asset::grid(g), "finite");
+    CHECK_REJECTS(Asset::sheet(g), "finite");
   }
   SECTION("NaN position") {
-    auto g = smallGridDesc();
+    auto g = smallSheetDesc();
     g.placement.position.x() = kNaN;
-    CHECK_REJECTS(Asset::grid(g), "finite");
+    CHECK_REJECTS(Asset::sheet(g), "finite");
   }
   SECTION("infinite position") {
-    auto g = smallGridDesc();
+    auto g = smallSheetDesc();
     g.placement.position.z() = kInf;
-    CHECK_REJECTS(Asset::grid(g), "finite");
+    CHECK_REJECTS(Asset::sheet(g), "finite");
   }
 }
 
@@ -752,9 +752,9 @@ TEST_CASE("a float solver rejects finite doubles that float cannot hold", "[inpu
   }
   SECTION("setInverseMass") { CHECK_REJECTS_ANY(solver.setInverseMass(3, huge)); }
   SECTION("grid spacing") {
-    auto g = smallGridDesc();
+    auto g = smallSheetDesc();
     g.spacing = huge;
-    CHECK_REJECTS_ANY(drape::ClothAsset<S>::grid(g));
+    CHECK_REJECTS_ANY(drape::ClothAsset<S>::sheet(g));
   }
   SECTION("area density so small that 1 / mass overflows") {
     CHECK_REJECTS_ANY(drape::Solver<S>(smallGrid<S>(), drape::Settings{}, 1e-300));

@@ -8,11 +8,11 @@
 namespace {
 
 template <class S> drape::Solver<S> clothOnFloor(const drape::Solid<drape::Plane>& floor) {
-  drape::GridDesc grid;
+  drape::SheetDesc grid;
   grid.nx = grid.ny = 10;
   grid.spacing = 0.02;
   grid.placement.position = {0, 0, 0.005};  // resting at the thickness
-  auto asset = std::make_shared<const drape::ClothAsset<S>>(drape::ClothAsset<S>::grid(grid));
+  auto asset = std::make_shared<const drape::ClothAsset<S>>(drape::ClothAsset<S>::sheet(grid));
   drape::Solver<S> solver(asset);
   solver.addSolid(floor);
   return solver;

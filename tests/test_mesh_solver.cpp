@@ -13,11 +13,11 @@ TEMPLATE_TEST_CASE("a cloth dropped on a meshed ball rests on it like on the ana
                    double) {
   using S = TestType;
   constexpr double kRadius = 0.15;
-  drape::GridDesc grid;
+  drape::SheetDesc grid;
   grid.nx = grid.ny = 21;
   grid.spacing = 0.02;
   grid.placement.position = {0, 0, 0.25};
-  auto asset = std::make_shared<const drape::ClothAsset<S>>(drape::ClothAsset<S>::grid(grid));
+  auto asset = std::make_shared<const drape::ClothAsset<S>>(drape::ClothAsset<S>::sheet(grid));
   drape::Settings settings;
   settings.subStepCount = 10;
 

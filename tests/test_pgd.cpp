@@ -357,12 +357,12 @@ struct Run {
 
 Run dropOnSphereAndBox(bool culling, int frames) {
   using namespace drape;
-  GridDesc grid;
+  SheetDesc grid;
   grid.nx = 20;
   grid.ny = 20;
   grid.spacing = 0.02;
   grid.placement.position = V3(0.01, 0.02, 0.12);
-  auto asset = std::make_shared<const ClothAsset<double>>(ClothAsset<double>::grid(grid));
+  auto asset = std::make_shared<const ClothAsset<double>>(ClothAsset<double>::sheet(grid));
   Settings settings;
   settings.culling = culling;
   Solver<double> solver(asset, settings);

@@ -12,11 +12,11 @@
 namespace {
 
 template <class S> std::shared_ptr<const drape::ClothAsset<S>> flatCloth(int n, double spacing, double z) {
-  drape::GridDesc grid;
+  drape::SheetDesc grid;
   grid.nx = grid.ny = n;
   grid.spacing = spacing;
   grid.placement.position = {0, 0, z};
-  return std::make_shared<const drape::ClothAsset<S>>(drape::ClothAsset<S>::grid(grid));
+  return std::make_shared<const drape::ClothAsset<S>>(drape::ClothAsset<S>::sheet(grid));
 }
 
 double falloff(drape::Falloff f, double t) { return f == drape::Falloff::Linear ? t : t * t * (3 - 2 * t); }
@@ -120,10 +120,10 @@ struct Impact {
 /// into it at `u` for 0.12 s, then stops under it. Same parameters with and without the repulsion region.
 template <class S> Impact impact(double u, double R) {
   const drape::Index n = 41;
-  drape::GridDesc grid;
+  drape::SheetDesc grid;
   grid.nx = grid.ny = n;
   grid.spacing = 0.02;
-  const auto asset = std::make_shared<const drape::ClothAsset<S>>(drape::ClothAsset<S>::grid(grid));
+  const auto asset = std::make_shared<const drape::ClothAsset<S>>(drape::ClothAsset<S>::sheet(grid));
   drape::Solver<S> solver(asset);
   for (const drape::Index corner : {drape::Index(0), n - 1, n * (n - 1), n * n - 1}) solver.pin(corner);
   drape::Solid<drape::Sphere> ball;

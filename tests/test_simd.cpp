@@ -17,11 +17,11 @@ using drape::SimdLevel;
 /// An irregular cloth: a 13 x 11 grid (odd sizes, so colours end in partial blocks and odd block counts) with
 /// its positions jittered by up to 30 % of the spacing, as a mesh (every edge a stretch constraint) or a grid.
 std::shared_ptr<const drape::ClothAsset<float>> jitteredCloth(bool mesh) {
-  drape::GridDesc g;
+  drape::SheetDesc g;
   g.nx = 13;
   g.ny = 11;
   g.spacing = 0.02;
-  const auto grid = drape::ClothAsset<float>::grid(g);
+  const auto grid = drape::ClothAsset<float>::sheet(g);
   if (!mesh) return std::make_shared<const drape::ClothAsset<float>>(grid);
   std::mt19937 rng(3);
   std::uniform_real_distribution<float> u(-0.006f, 0.006f);
@@ -139,11 +139,11 @@ TEST_CASE("the SIMD constraint kernels give the scalar kernel's bits", "[simd]")
 
 TEMPLATE_TEST_CASE("a vertex pinned or freed between steps is solved with its new mass", "[simd][input]", float,
                    double) {
-  drape::GridDesc g;
+  drape::SheetDesc g;
   g.nx = 9;
   g.ny = 9;
   g.spacing = 0.05;
-  auto asset = std::make_shared<const drape::ClothAsset<TestType>>(drape::ClothAsset<TestType>::grid(g));
+  auto asset = std::make_shared<const drape::ClothAsset<TestType>>(drape::ClothAsset<TestType>::sheet(g));
   drape::Settings settings;
   settings.subStepCount = 4;
   drape::Solver<TestType> solver(asset, settings);

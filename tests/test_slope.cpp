@@ -28,7 +28,7 @@ double rad(double deg) { return deg * std::numbers::pi / 180.0; }
 
 }  // namespace
 
-TEMPLATE_TEST_CASE("improved: a cloth resting on a floor or sliding down a slope does not tremble nor penetrate",
+TEMPLATE_TEST_CASE("faces: a cloth resting on a floor or sliding down a slope does not tremble nor penetrate",
                    "[trembling][penetration]", float, double) {
   // Trembling as in docs/design.md §10, over the second half of a 5 s run (the cloth has landed by then). The target
   // is 1e-4 m/s; the bounds here are tighter. Measured worst cases: float 1.4e-6 m/s (positions within 0.5 m of the
@@ -37,7 +37,7 @@ TEMPLATE_TEST_CASE("improved: a cloth resting on a floor or sliding down a slope
   for (double angle : {0.0, 30.0})
     for (int subSteps : {1, 2, 5, 10})
       for (double mu : {0.0, 0.3}) {
-        const auto c = slope(angle, subSteps, mu, CollisionMethod::Improved);
+        const auto c = slope(angle, subSteps, mu, CollisionMethod::Faces);
         const auto r = runSlope<TestType>(c);
         INFO("angle " << angle << " substeps " << subSteps << " mu " << mu << ": trembling rms " << r.tremblingRms
                       << " max " << r.tremblingMax << ", shortfall " << r.maxShortfall << " m, contact "
@@ -55,16 +55,16 @@ TEMPLATE_TEST_CASE("improved: a cloth resting on a floor or sliding down a slope
 TEMPLATE_TEST_CASE("sliding down a 30 degree slope follows Coulomb's law", "[sliding]", float, double) {
   const double theta = rad(30);
   SECTION("frictionless: g sin(theta) within 2 %") {
-    const auto r = runSlope<TestType>(slope(30, 10, 0.0, CollisionMethod::Improved));
+    const auto r = runSlope<TestType>(slope(30, 10, 0.0, CollisionMethod::Faces));
     CHECK(r.acceleration == Approx(kG * std::sin(theta)).epsilon(0.02));
   }
   SECTION("mu = 0.3: g (sin - mu cos) within 2 %") {
-    const auto r = runSlope<TestType>(slope(30, 10, 0.3, CollisionMethod::Improved));
+    const auto r = runSlope<TestType>(slope(30, 10, 0.3, CollisionMethod::Faces));
     CHECK(r.acceleration == Approx(kG * (std::sin(theta) - 0.3 * std::cos(theta))).epsilon(0.02));
   }
   SECTION("mu = 0.8 sticks: creep below 1e-4 m/s") {
     for (int subSteps : {1, 5, 10}) {
-      const auto r = runSlope<TestType>(slope(30, subSteps, 0.8, CollisionMethod::Improved));
+      const auto r = runSlope<TestType>(slope(30, subSteps, 0.8, CollisionMethod::Faces));
       INFO("substeps " << subSteps);
       CHECK(std::abs(r.creep) < 1e-4);
     }
@@ -73,7 +73,7 @@ TEMPLATE_TEST_CASE("sliding down a 30 degree slope follows Coulomb's law", "[sli
 
 TEST_CASE("culling skips most faces while the cloth is in the air", "[culling]") {
   // Before any vertex lands, the slope scene is all air; a sphere under the cloth makes faces reach PGD.
-  drape::scenes::SlopeConfig c = slope(30, 5, 0.0, CollisionMethod::Improved);
+  drape::scenes::SlopeConfig c = slope(30, 5, 0.0, CollisionMethod::Faces);
   c.frames = 3;
   auto solver = drape::scenes::makeSlope<double>(c);
   drape::Settings settings = solver.settings();
@@ -91,30 +91,30 @@ TEST_CASE("culling skips most faces while the cloth is in the air", "[culling]")
   CHECK(worst > 0.95);
 }
 
-TEMPLATE_TEST_CASE("baseline trembles where a fold touches two walls; improved is at least 10 times calmer",
+TEMPLATE_TEST_CASE("in-solve trembles where a fold touches two walls; faces is at least 10 times calmer",
                    "[trembling]", float, double) {
   // The condition found: a cloth folded into a frictionless 45 degree V gutter, 10 substeps, 5 iterations.
   // On a single plane or slope neither method trembles (the test above), so this is where the comparison is.
   drape::scenes::GutterConfig c;
   c.settings.iterationCount = 5;
-  c.settings.collisionMethod = CollisionMethod::Baseline;
-  const auto baseline = drape::scenes::runGutter<TestType>(c);
-  c.settings.collisionMethod = CollisionMethod::Improved;
-  const auto improved = drape::scenes::runGutter<TestType>(c);
+  c.settings.collisionMethod = CollisionMethod::InSolve;
+  const auto inSolve = drape::scenes::runGutter<TestType>(c);
+  c.settings.collisionMethod = CollisionMethod::Faces;
+  const auto faces = drape::scenes::runGutter<TestType>(c);
   c.settings.propagationRings = 0;
   const auto unpropagated = drape::scenes::runGutter<TestType>(c);
-  INFO("trembling rms: baseline " << baseline.tremblingRms << ", improved " << improved.tremblingRms
-                                  << ", improved without propagation " << unpropagated.tremblingRms);
-  CHECK(baseline.tremblingRms > 1e-3);
-  CHECK(improved.tremblingRms < 1e-4);
-  CHECK(improved.tremblingRms * 10 < baseline.tremblingRms);
+  INFO("trembling rms: in-solve " << inSolve.tremblingRms << ", faces " << faces.tremblingRms
+                                  << ", faces without propagation " << unpropagated.tremblingRms);
+  CHECK(inSolve.tremblingRms > 1e-3);
+  CHECK(faces.tremblingRms < 1e-4);
+  CHECK(faces.tremblingRms * 10 < inSolve.tremblingRms);
   // Propagation is what settles the fold: without it the split alone trembles too.
-  CHECK(improved.tremblingRms * 10 < unpropagated.tremblingRms);
-  CHECK(improved.maxPenetration == 0);
-  CHECK(improved.contactFraction > 0.5);
+  CHECK(faces.tremblingRms * 10 < unpropagated.tremblingRms);
+  CHECK(faces.maxPenetration == 0);
+  CHECK(faces.contactFraction > 0.5);
 }
 
-TEMPLATE_TEST_CASE("where two walls meet, improved keeps the cloth outside both", "[penetration]", float, double) {
+TEMPLATE_TEST_CASE("where two walls meet, faces keeps the cloth outside both", "[penetration]", float, double) {
   // Pushing a vertex out of one wall can put it back into the other. The solver places such vertices at the
   // nearest point outside all their contact planes and repeats its vertex passes where solids meet; alternating
   // projections alone left ~1 mm of a 5 mm thickness in a 30-degree-wide V (75 degree walls).

@@ -95,11 +95,11 @@ struct RunFigures {
 /// An n x n cloth at 2 cm spacing dropped from 0.4 m onto a ball of radius 0.15 on the floor (mu = 0.5).
 template <class S>
 RunFigures dropOnBall(const drape::Settings& settings, double dt, double seconds, int n = 30, bool withBall = true) {
-  drape::GridDesc grid;
+  drape::SheetDesc grid;
   grid.nx = grid.ny = n;
   grid.spacing = 0.02;
   grid.placement.position = {0.03, 0.01, 0.4};
-  auto asset = std::make_shared<const drape::ClothAsset<S>>(drape::ClothAsset<S>::grid(grid));
+  auto asset = std::make_shared<const drape::ClothAsset<S>>(drape::ClothAsset<S>::sheet(grid));
   drape::Solver<S> solver(asset, settings);
   drape::Solid<drape::Sphere> ball;
   ball.shape.radius = 0.15;
@@ -226,11 +226,11 @@ TEMPLATE_TEST_CASE("mass ratio 1:1e6 between neighbours and pinned next to free:
                    "[stability]", float, double) {
   using S = TestType;
   constexpr int n = 16;
-  drape::GridDesc grid;
+  drape::SheetDesc grid;
   grid.nx = grid.ny = n;
   grid.spacing = 0.02;
   grid.placement.position = {0, 0, 0.2};
-  auto asset = std::make_shared<const drape::ClothAsset<S>>(drape::ClothAsset<S>::grid(grid));
+  auto asset = std::make_shared<const drape::ClothAsset<S>>(drape::ClothAsset<S>::sheet(grid));
   drape::Solver<S> solver(asset);
   drape::Solid<drape::Plane> floor;
   floor.staticFriction = floor.dynamicFriction = 0.5;
@@ -297,11 +297,11 @@ TEST_CASE("200 substeps in float: nothing explodes, precision loss against doubl
 TEMPLATE_TEST_CASE("a resting cloth for 100 000 substeps: energy never grows, no creep, no drift", "[stability]",
                    float, double) {
   using S = TestType;
-  drape::GridDesc grid;
+  drape::SheetDesc grid;
   grid.nx = grid.ny = 10;
   grid.spacing = 0.02;
   grid.placement.position = {0.3, -0.2, 0.005};  // resting at the thickness
-  auto asset = std::make_shared<const drape::ClothAsset<S>>(drape::ClothAsset<S>::grid(grid));
+  auto asset = std::make_shared<const drape::ClothAsset<S>>(drape::ClothAsset<S>::sheet(grid));
   drape::Solver<S> solver(asset);
   solver.addSolid(drape::Solid<drape::Plane>{});
   const drape::Index nv = solver.vertexCount();

@@ -180,7 +180,7 @@ const char* methodName(drape::CollisionMethod m) { return drape::toString(m); }
 TEMPLATE_TEST_CASE("pinned state hashes: the slope at 1, 5 and 10 substeps, each collision method", "[hashes]", float,
                    double) {
   for (const auto method :
-       {drape::CollisionMethod::Improved, drape::CollisionMethod::Baseline, drape::CollisionMethod::Vertex})
+       {drape::CollisionMethod::Faces, drape::CollisionMethod::InSolve, drape::CollisionMethod::Vertices})
     for (const int subSteps : {1, 5, 10})
       checkPinned(std::string("slope/") + methodName(method) + "/" + std::to_string(subSteps) + "/" +
                       scalarName<TestType>(),

@@ -16,12 +16,12 @@ constexpr double kRodSpeed = 1.0;  // m/s upward
 /// A cloth that caught the rod hangs over it, with those rows on top; one it passed through lies under it.
 template <class S, class Shape>
 int verticesBelowRod(const Shape& shape, drape::CollisionMethod method) {
-  drape::GridDesc grid;
+  drape::SheetDesc grid;
   grid.nx = 16;
   grid.ny = 16;
   grid.spacing = kSpacing;
   grid.placement.position = {0, 0, 0};
-  auto asset = std::make_shared<const drape::ClothAsset<S>>(drape::ClothAsset<S>::grid(grid));
+  auto asset = std::make_shared<const drape::ClothAsset<S>>(drape::ClothAsset<S>::sheet(grid));
   drape::Settings settings;
   settings.collisionMethod = method;
   drape::Solver<S> solver(asset, settings);
@@ -56,16 +56,16 @@ TEMPLATE_TEST_CASE("a thin capsule between vertex rows: faces catch it, vertices
   drape::Capsule rod;
   rod.radius = 0.003;  // diameter 6 mm < half the 2 cm spacing; the 5 mm thickness leaves a gap at vertices
   rod.halfHeight = 0.3;
-  CHECK(verticesBelowRod<TestType>(rod, drape::CollisionMethod::Improved) == 0);
-  CHECK(verticesBelowRod<TestType>(rod, drape::CollisionMethod::Vertex) > 0);
+  CHECK(verticesBelowRod<TestType>(rod, drape::CollisionMethod::Faces) == 0);
+  CHECK(verticesBelowRod<TestType>(rod, drape::CollisionMethod::Vertices) > 0);
 }
 
 TEMPLATE_TEST_CASE("a thin box between vertex rows: faces catch it, vertices let it through", "[thin]", float,
                    double) {
   drape::Box plate;
   plate.halfExtents = {0.3, 0.002, 0.002};  // 4 mm wide, along x
-  CHECK(verticesBelowRod<TestType>(plate, drape::CollisionMethod::Improved) == 0);
-  CHECK(verticesBelowRod<TestType>(plate, drape::CollisionMethod::Vertex) > 0);
+  CHECK(verticesBelowRod<TestType>(plate, drape::CollisionMethod::Faces) == 0);
+  CHECK(verticesBelowRod<TestType>(plate, drape::CollisionMethod::Vertices) > 0);
 }
 
 TEMPLATE_TEST_CASE("a cloth pinched between the floor and a box lower than twice the thickness does not blow up",
@@ -80,11 +80,11 @@ TEMPLATE_TEST_CASE("a cloth pinched between the floor and a box lower than twice
   // box's bottom edges still tremble (with vertex contacts only the cloth is at rest), a known issue.
   for (const double gapInThicknesses : {1.9, 1.8, 1.6}) {
     drape::Settings settings;
-    drape::GridDesc grid;
+    drape::SheetDesc grid;
     grid.nx = grid.ny = 21;
     grid.spacing = 0.02;
     grid.placement.position = {0, 0, settings.thickness};
-    drape::Solver<S> cloth(std::make_shared<const drape::ClothAsset<S>>(drape::ClothAsset<S>::grid(grid)), settings);
+    drape::Solver<S> cloth(std::make_shared<const drape::ClothAsset<S>>(drape::ClothAsset<S>::sheet(grid)), settings);
     cloth.addSolid(drape::Solid<drape::Plane>{});
     drape::Solid<drape::Box> box;
     box.shape.halfExtents = {0.08, 0.08, 0.04};

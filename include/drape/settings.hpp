@@ -7,25 +7,35 @@
 
 namespace drape {
 
+/// How contacts are resolved each substep (docs/design.md §1, §4, §14).
 enum class CollisionMethod {
-  /// The SDF collision paper's method: after the velocity update, vertex and face contacts (PGD) are projected,
-  /// each contact vertex's velocity relative to the solid is split (normal part attenuated, tangential part kept,
-  /// Coulomb friction), and the normal corrections are propagated to neighbouring vertices.
-  Improved,
-  /// The "previous method" the SDF collision paper improves on: contacts are projected inside the constraint solve, the
-  /// velocity comes from positions, no split, no propagation. Kept to compare against.
-  Baseline,
-  /// Vertex contacts only, with the split (cheaper; misses features smaller than the spacing).
-  Vertex,
+  /// Vertex and face contacts, projected after the velocity update (a face's deepest point found by PGD); each
+  /// contact vertex's velocity relative to the solid is split (normal part attenuated, tangential part kept,
+  /// Coulomb friction), and the normal corrections are propagated to neighbouring vertices. The SDF collision
+  /// paper's method, and the default.
+  Faces,
+  /// Vertex contacts only, with the split: cheaper, but misses solid features smaller than the cloth's spacing.
+  Vertices,
+  /// Vertex and face contacts projected inside the constraint solve, with position-level friction; velocities
+  /// come from the positions: no split, no propagation. The "previous method" that paper improves on, kept to
+  /// compare against.
+  InSolve,
 };
 
 inline const char* toString(CollisionMethod m) {
   switch (m) {
-    case CollisionMethod::Improved: return "improved";
-    case CollisionMethod::Baseline: return "baseline";
-    case CollisionMethod::Vertex: return "vertex";
+    case CollisionMethod::Faces: return "faces";
+    case CollisionMethod::Vertices: return "vertices";
+    case CollisionMethod::InSolve: return "in-solve";
   }
   return "?";
+}
+
+/// The method named "faces", "vertices" or "in-solve" (toString's names); throws drape::Error for another.
+inline CollisionMethod collisionMethodFromString(const std::string& name) {
+  for (CollisionMethod m : {CollisionMethod::Faces, CollisionMethod::Vertices, CollisionMethod::InSolve})
+    if (name == toString(m)) return m;
+  throw Error("drape: unknown collision method '" + name + "' (faces, vertices, in-solve)");
 }
 
 /// How the cloth's push on a dynamic solid is estimated (the cloth-rigid coupling thesis, 5.2; docs/design.md §6).
@@ -74,7 +84,7 @@ struct Settings {
   double bendingCompliance = 1e-3;  ///< far-vertex pairs across interior edges: small values keep the cloth flat
   double pinCompliance = 0;       ///< attachments of pinned vertices to their targets
 
-  CollisionMethod collisionMethod = CollisionMethod::Improved;
+  CollisionMethod collisionMethod = CollisionMethod::Faces;
   double thickness = 0.005;    ///< m: contacts hold the cloth this far outside each solid
   double normalDamping = 1;    ///< fraction of the separating normal velocity a contact removes, in [0, 1]
   int pgdIterations = 12;      ///< most SDF evaluations per face in the deepest-point search (>= 1); it
@@ -109,9 +119,9 @@ struct Settings {
     requireRange(shearCompliance, 0, 1e6, "shearCompliance");
     requireRange(bendingCompliance, 0, 1e6, "bendingCompliance");
     requireRange(pinCompliance, 0, 1e6, "pinCompliance");
-    require(collisionMethod == CollisionMethod::Improved || collisionMethod == CollisionMethod::Baseline ||
-                collisionMethod == CollisionMethod::Vertex,
-            "collisionMethod is not one of improved, baseline, vertex");
+    require(collisionMethod == CollisionMethod::Faces || collisionMethod == CollisionMethod::InSolve ||
+                collisionMethod == CollisionMethod::Vertices,
+            "collisionMethod is not one of faces, vertices, in-solve");
     require(std::isfinite(thickness) && thickness > 0 && thickness <= 1,
             "thickness must be in (0, 1] m (got " + std::to_string(thickness) + ")");
     requireRange(normalDamping, 0, 1, "normalDamping");

@@ -58,12 +58,12 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     for (const auto& e : asset_->edges)
       edgeSum += double((asset_->restPositions[e[1]] - asset_->restPositions[e[0]]).norm());
     const double meanEdge = asset_->edges.empty() ? 1.0 : edgeSum / double(asset_->edges.size());
-    grid_.setTopology(asset_->triangles, n, S(2 * std::max(meanEdge, 1e-6)));
+    bins_.setTopology(asset_->triangles, n, S(2 * std::max(meanEdge, 1e-6)));
   }
 
   /// Collision work of the last substep.
   const CollisionStats& stats() const { return stats_; }
-  /// Contact records of the last substep (improved and vertex methods).
+  /// Contact records of the last substep (the faces and vertices methods).
   const ContactBuffer<S>& contacts() const { return contacts_; }
 
  private:
@@ -80,7 +80,7 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
   // --- the front end's hooks (SolverFront) ------------------------------------------------------------------
   void loadState() const {}
   void storeState(StateChange change) {
-    if (change == StateChange::Positions) gridFresh_ = false;  // the grid's binned positions are not these
+    if (change == StateChange::Positions) binsFresh_ = false;  // the bins' binned positions are not these
     if (change == StateChange::Masses) massesChanged_ = true;  // the lane copies are gathered again
   }
   static void checkSettings(const Settings&) {}  // the CPU runs every valid setting
@@ -96,7 +96,7 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     if (shift.isZero(0)) return;
     const Vec3<S> shiftS = shift.cast<S>();
     for (auto& p : state_.x) p -= shiftS;
-    gridFresh_ = false;
+    binsFresh_ = false;
   }
 
   template <class F> void forEachCompiled(F&& f) {
@@ -113,8 +113,8 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     lambdaPins_.resize(pins_.size());
     for (std::size_t k = 0; k < pins_.size(); ++k)
       pinLocal_[k] = {pins_[k].vertex, (pins_[k].target - state_.origin).template cast<S>()};
-    gridded_ = settings_.broadPhase && has.bounded > 0;
-    gridFresh_ = gridFresh_ && gridded_;  // a grid not kept up in a substep without it is built anew
+    useBins_ = settings_.broadPhase && has.bounded > 0;
+    binsFresh_ = binsFresh_ && useBins_;  // bins not kept up in a substep without it is built anew
     moveBound_ = 0;
     contacts_.keepLines(coupled_);
     if (coupled_ && vStart_.size() != state_.v.size()) {
@@ -170,7 +170,7 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     const S stretchAlpha = S(settings_.stretchCompliance) / h2, shearAlpha = S(settings_.shearCompliance) / h2,
             bendingAlpha = S(settings_.bendingCompliance) / h2, pinAlpha = S(settings_.pinCompliance) / h2;
     const S thickness = S(settings_.thickness);
-    const bool baseline = settings_.collisionMethod == CollisionMethod::Baseline;
+    const bool inSolve = settings_.collisionMethod == CollisionMethod::InSolve;
     const int iterations = settings_.iterationCount;
     if (iterations > 1) {  // one pass needs no multipliers (see solveDistanceSet)
       DRAPE_OMP(single)
@@ -191,9 +191,9 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
           solvePins(pinLocal_.data(), Index(pinLocal_.size()), pinAlpha, lambdaPins_.data(), xw, w);
         }
       }
-      if (baseline) {  // the previous method collides inside the solve, on the unpacked positions
+      if (inSolve) {  // contacts inside the solve, on the unpacked positions
         unpack(x, xw);
-        collideBaseline(h, thickness);
+        collideInSolve(h, thickness);
         DRAPE_OMP(for schedule(static))
         for (Index i = 0; i < n; ++i) xw[i].template head<3>() = x[i];
       }
@@ -202,12 +202,12 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     // 3. update velocity (updateVelocities). Where a vertex may touch several surfaces, the positions the
     //    contacts start from are kept (in the prediction's buffer, free from here on) for the pinched vertices'
     //    least-squares placement.
-    //    With the broad phase, the update also measures how far the vertices got from where the grid binned them,
-    //    so the grid is rebuilt only when queries would have to grow too much.
+    //    With the broad phase, the update also measures how far the vertices got from where the bins took them,
+    //    so the bins are rebuilt only when queries would have to grow too much.
     const S invH = S(1) / h;
-    if (gridded_ && gridFresh_) {
-      const S far = reconcile_ ? updateVelocities<true, true>(n, xw, xp, x, v, invH, grid_.binned())
-                               : updateVelocities<false, true>(n, xw, xp, x, v, invH, grid_.binned());
+    if (useBins_ && binsFresh_) {
+      const S far = reconcile_ ? updateVelocities<true, true>(n, xw, xp, x, v, invH, bins_.binned())
+                               : updateVelocities<false, true>(n, xw, xp, x, v, invH, bins_.binned());
       addMoveBound(moveBound_, std::sqrt(far));
       DRAPE_OMP(barrier)
     } else if (reconcile_) {
@@ -218,7 +218,10 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
 
     // 4. collide
     if (coupled_) copyVelocities(vPre_);  // before any contact acts
-    if (!baseline) collide(h, thickness);
+    if (!inSolve) {
+      projectAll(thickness, settings_.collisionMethod == CollisionMethod::Faces);
+      respondAndPropagate(h);
+    }
 
     // 5. the cloth's push on the coupled bodies, applied before they move (docs/design.md §6)
     if (coupled_) {
@@ -306,7 +309,7 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
   /// Projects every vertex, then (when kFaces and the field is not linear) every face, out of each solid in
   /// turn, recording the contacts. On a linear field a face is deepest at a vertex, which the vertex pass has
   /// already handled. Vertices already within `slack` of the thickness are left where they are. With the broad
-  /// phase on, a bounded solid visits only the vertices and faces the grid finds near its box.
+  /// phase on, a bounded solid visits only the vertices and faces the bins find near its box.
   template <bool kFaces, bool kCull> void projectContacts(S thickness, S slack = S(0)) {
     Vec3<S>* x = state_.x.data();
     const S* w = state_.invMass.data();
@@ -314,28 +317,28 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     forEachCompiled([&](auto& list) {
       for (const auto& solid : list) {
         constexpr bool kFacePass = kFaces && !std::decay_t<decltype(solid.sdf)>::kLinear;
-        if (gridded_ && solid.bounded) {
+        if (useBins_ && solid.bounded) {
           DRAPE_OMP(single)
           {
-            if (grid_.stale()) grid_.build(x, this->asset_->triangles);
-            grid_.vertices(x, solid.boxLow, solid.boxHigh, thickness, nearVertices_);
+            if (bins_.stale()) bins_.build(x, this->asset_->triangles);
+            bins_.vertices(x, solid.boxLow, solid.boxHigh, thickness, nearVertices_);
           }
           projectVertexContacts(solid, thickness, x, w, ItemList{nearVertices_.data()}, Index(nearVertices_.size()),
-                                contacts_, stats_, grid_.binned(), moveBound_, slack);
+                                contacts_, stats_, bins_.binned(), moveBound_, slack);
           DRAPE_OMP(single)
           {
-            grid_.noteDrift(moveBound_);
+            bins_.noteDrift(moveBound_);
             moveBound_ = 0;
             if constexpr (kFacePass) {
-              grid_.faces(x, solid.boxLow, solid.boxHigh, thickness, nearFaces_);
-              grid_.noteDrift(projectFaceContacts<kCull, true>(
+              bins_.faces(x, solid.boxLow, solid.boxHigh, thickness, nearFaces_);
+              bins_.noteDrift(projectFaceContacts<kCull, true>(
                   solid, thickness, this->settings_.pgdIterations, this->asset_->triangles, ItemList{nearFaces_.data()},
-                  Index(nearFaces_.size()), x, w, contacts_, stats_, grid_.binned()));
+                  Index(nearFaces_.size()), x, w, contacts_, stats_, bins_.binned()));
             }
           }
         } else {
-          // Without a grid, the binned positions are the positions: nothing drifts.
-          const Vec3<S>* binned = gridded_ ? grid_.binned() : x;
+          // Without the bins, the binned positions are the positions: nothing drifts.
+          const Vec3<S>* binned = useBins_ ? bins_.binned() : x;
           projectVertexContacts(solid, thickness, x, w, AllItems{}, n, contacts_, stats_, binned, moveBound_, slack);
           if constexpr (kFacePass) {
             DRAPE_OMP(single)
@@ -343,13 +346,13 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
               const S moved = projectFaceContacts<kCull>(solid, thickness, this->settings_.pgdIterations, this->asset_->triangles,
                                                          AllItems{}, Index(this->asset_->triangles.size()), x, w, contacts_,
                                                          stats_, binned);
-              if (gridded_) grid_.noteDrift(moved);
+              if (useBins_) bins_.noteDrift(moved);
             }
           }
-          if (gridded_) {
+          if (useBins_) {
             DRAPE_OMP(single)
             {
-              grid_.noteDrift(moveBound_);
+              bins_.noteDrift(moveBound_);
               moveBound_ = 0;
             }
           }
@@ -362,16 +365,16 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
   /// pinched between a ball and the floor) pushing a vertex out of one can put it back into another, so such
   /// vertices go outside all their contact planes at once and, where several solids exist, the vertex passes
   /// repeat on the true fields until no vertex moves by more than a ten-thousandth of the thickness.
-  void projectAllContacts(S thickness, bool faces) {
+  void projectAll(S thickness, bool faces) {
     DRAPE_OMP(single)
     {
       contacts_.begin();
-      if (gridded_) {
-        grid_.noteDrift(moveBound_);  // the prediction's and the solve's moves (updateVelocities)
-        // The baseline collides inside the solve, before the update has measured the solve's moves.
-        const bool inSolve = settings_.collisionMethod == CollisionMethod::Baseline;
-        if (!gridFresh_ || inSolve || grid_.stale()) grid_.build(state_.x.data(), asset_->triangles);
-        gridFresh_ = true;
+      if (useBins_) {
+        bins_.noteDrift(moveBound_);  // the prediction's and the solve's moves (updateVelocities)
+        // The in-solve method collides inside the solve, before the update has measured the solve's moves.
+        const bool inSolve = settings_.collisionMethod == CollisionMethod::InSolve;
+        if (!binsFresh_ || inSolve || bins_.stale()) bins_.build(state_.x.data(), asset_->triangles);
+        binsFresh_ = true;
       }
       moveBound_ = 0;
     }
@@ -397,29 +400,29 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
 
   void settleOntoContactPlanes() {
     projectOntoContactPlanes(contacts_, state_.x.data(), xPredicted_.data(),
-                             gridded_ ? grid_.binned() : state_.x.data(), moveBound_);
-    if (gridded_) {
+                             useBins_ ? bins_.binned() : state_.x.data(), moveBound_);
+    if (useBins_) {
       DRAPE_OMP(single)
       {
-        grid_.noteDrift(moveBound_);
+        bins_.noteDrift(moveBound_);
         moveBound_ = 0;
       }
     }
   }
 
-  /// The "previous method": the same vertex and face contacts, projected inside the solve pass, with
+  /// CollisionMethod::InSolve: the same vertex and face contacts, projected inside the solve pass, with
   /// position-level friction; the velocity update then turns every projection into velocity.
-  void collideBaseline(S h, S thickness) {
-    projectAllContacts(thickness, true);
+  void collideInSolve(S h, S thickness) {
+    projectAll(thickness, true);
     if (hasFriction_) applyContactFriction(contacts_, state_.x.data(), xPrev_.data(), h);
   }
 
-  void collide(S h, S thickness) {
+  /// The velocity split with friction, then (with faces) propagation, after the contacts were projected.
+  void respondAndPropagate(S h) {
     Vec3<S>* x = state_.x.data();
     Vec3<S>* v = state_.v.data();
     const S* w = state_.invMass.data();
-    const bool faces = settings_.collisionMethod == CollisionMethod::Improved;
-    projectAllContacts(thickness, faces);
+    const bool faces = settings_.collisionMethod == CollisionMethod::Faces;
     if (hasFriction_)
       respondContacts<true>(contacts_, x, xPrev_.data(), v, h, S(settings_.normalDamping));
     else
@@ -442,11 +445,11 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
   bool repulsive_ = false;    ///< some solid has a repulsion region this substep
   bool reconcile_ = false;    ///< a vertex may touch several surfaces this substep
   bool coupled_ = false;      ///< some solid is a dynamic body this substep
-  bool gridded_ = false;      ///< contacts with bounded solids go through the grid this substep
-  bool gridFresh_ = false;    ///< the grid was built, and every move since is in its drift
+  bool useBins_ = false;      ///< contacts with bounded solids go through the bins this substep
+  bool binsFresh_ = false;    ///< the bins were built, and every move since is in its drift
   bool massesChanged_ = false;  ///< an inverse mass changed since the lane copies were gathered
-  ClothGrid<S> grid_;
-  std::vector<Index> nearVertices_, nearFaces_;  ///< what the grid found near the current solid
+  VertexBins<S> bins_;
+  std::vector<Index> nearVertices_, nearFaces_;  ///< what the bins found near the current solid
   S moveBound_ = 0;  ///< the passes' largest vertex moves, summed (shared by the team)
   std::vector<Vec3<S>> vStart_, vPre_;                  ///< velocities at the substep's start, before contacts
   std::vector<coupling::BodySums> bodySums_;  ///< what each coupled body's exchange and pinches add up to

@@ -22,7 +22,7 @@
 
 int main(int argc, char** argv) {
   drape::scenes::SlopeConfig c;
-  std::string method = "improved", scalar = "float";
+  std::string method = "faces", scalar = "float";
   bool json = false, gpu = false;
   std::string backend = "auto", pngDir;
   int pngEvery = 30;
@@ -36,7 +36,7 @@ int main(int argc, char** argv) {
   app.add_option("--nx", c.nx, "vertices across")->check(CLI::Range(2, 4096))->capture_default_str();
   app.add_option("--ny", c.ny, "vertices down the slope")->check(CLI::Range(2, 4096))->capture_default_str();
   app.add_option("--spacing", c.spacing, "vertex spacing in metres")->check(CLI::Range(1e-4, 1.0))->capture_default_str();
-  app.add_option("--method", method, "collision method")->check(CLI::IsMember({"improved", "baseline", "vertex"}))->capture_default_str();
+  app.add_option("--method", method, "collision method")->check(CLI::IsMember({"faces", "vertices", "in-solve"}))->capture_default_str();
   app.add_option("--scalar", scalar, "floating-point type")->check(CLI::IsMember({"float", "double"}))->capture_default_str();
   app.add_flag("--json", json, "print one JSON object on stdout");
   app.add_flag("--gpu", gpu, "run on the GPU (float; every method)");
@@ -52,9 +52,7 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e, std::cerr, std::cerr);
   }
-  c.method = method == "baseline" ? drape::CollisionMethod::Baseline
-             : method == "vertex" ? drape::CollisionMethod::Vertex
-                                  : drape::CollisionMethod::Improved;
+  c.method = drape::collisionMethodFromString(method);
   try {
     if (!c.objDir.empty()) std::filesystem::create_directories(c.objDir);
     drape::scenes::SlopeResult r;

@@ -172,11 +172,11 @@ struct Options {
 
 template <class S> int run(const Options& o) {
   using Cloth = drape::BasicSolver<S, drape::Plane, drape::Sphere, drape::Box, drape::Capsule>;
-  drape::GridDesc grid;
+  drape::SheetDesc grid;
   grid.nx = grid.ny = o.side;
   grid.spacing = 0.02;
   grid.placement.position = {0, 0, 0.4};
-  auto asset = std::make_shared<const drape::ClothAsset<S>>(drape::ClothAsset<S>::grid(grid));
+  auto asset = std::make_shared<const drape::ClothAsset<S>>(drape::ClothAsset<S>::sheet(grid));
   drape::Settings settings;
   settings.subStepCount = o.substeps;
   settings.iterationCount = o.iterations;

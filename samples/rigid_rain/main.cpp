@@ -402,8 +402,8 @@ int main(int argc, char** argv) {
   app.add_option("--iterations", c.base.iterationCount, "cloth constraint passes per substep")
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
-  app.add_option("--method", method, "cloth-solid collision method (vertex: vertex contacts only, the thesis's)")
-      ->check(CLI::IsMember({"improved", "baseline", "vertex"}))
+  app.add_option("--method", method, "cloth-solid collision method (vertices: vertex contacts only, the thesis's)")
+      ->check(CLI::IsMember({"faces", "vertices", "in-solve"}))
       ->capture_default_str();
   app.add_option("--scalar", scalar, "the cloth's floating-point type")->check(CLI::IsMember({"float", "double"}))->capture_default_str();
   app.add_option("--trace", o.traceFile, "CSV per step: time, timing, penetration, speeds, strain, heights");
@@ -424,9 +424,7 @@ int main(int argc, char** argv) {
   }
   try {
     c.estimator = drape::scenes::contactForceFromString(estimator);
-    c.base.collisionMethod = method == "baseline" ? drape::CollisionMethod::Baseline
-                             : method == "vertex" ? drape::CollisionMethod::Vertex
-                                                  : drape::CollisionMethod::Improved;
+    c.base.collisionMethod = drape::collisionMethodFromString(method);
     c.shapes = 0;
     for (const auto& s : shapes) c.shapes |= unsigned(drape::scenes::rainShapeFromString(s));
     if (!o.objDir.empty()) std::filesystem::create_directories(o.objDir);

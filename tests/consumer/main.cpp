@@ -5,11 +5,11 @@
 #include <memory>
 
 int main() {
-  drape::GridDesc grid;
+  drape::SheetDesc grid;
   grid.nx = grid.ny = 8;
   grid.spacing = 0.05;
   grid.placement.position = {0, 0, 0.1};
-  auto asset = std::make_shared<const drape::ClothAsset<float>>(drape::ClothAsset<float>::grid(grid));
+  auto asset = std::make_shared<const drape::ClothAsset<float>>(drape::ClothAsset<float>::sheet(grid));
   drape::Solver<float> solver(asset);
   solver.addSolid(drape::Solid<drape::Plane>{});
   for (int frame = 0; frame < 60; ++frame) solver.step(1.0 / 60.0);

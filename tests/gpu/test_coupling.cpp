@@ -64,7 +64,7 @@ TEST_CASE("coupling on the GPU: a ball hitting a free cloth keeps the total mome
   };
   const Case c = GENERATE(Case{drape::ContactForce::Impulse, 0.015}, Case{drape::ContactForce::Energy, 0.05},
                           Case{drape::ContactForce::SubForce, 0.06});
-  const drape::CollisionMethod method = GENERATE(drape::CollisionMethod::Vertex, drape::CollisionMethod::Improved);
+  const drape::CollisionMethod method = GENERATE(drape::CollisionMethod::Vertices, drape::CollisionMethod::Faces);
   const double repulsion = GENERATE(0.0, 0.03);  // m: with the region, it pushes the ball back too (gatherRepulsionForces)
   drape::Settings settings;
   settings.gravity.setZero();
@@ -79,7 +79,7 @@ TEST_CASE("coupling on the GPU: a ball hitting a free cloth keeps the total mome
                                     << cpu.ballVelocity.transpose());
   CHECK(gpu.clothGot.norm() >= 0.05 * gpu.before.norm());  // the ball did push the cloth
   CHECK((gpu.after - gpu.before).norm() <= c.tolerance * gpu.before.norm());
-  if (method == drape::CollisionMethod::Vertex) {
+  if (method == drape::CollisionMethod::Vertices) {
     // Vertex contacts only: the GPU does the CPU's passes in its order, so the ball leaves with the CPU's
     // velocity to rounding (measured 2e-6 to 8.1e-5 m/s over the estimators, with and without the region).
     CHECK((gpu.ballVelocity - cpu.ballVelocity).norm() <= 1e-4);

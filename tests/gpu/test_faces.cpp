@@ -23,10 +23,10 @@ namespace layout = drape::gpu::layout;
 }  // namespace
 
 TEST_CASE("face colours share no vertex and hold every face once", "[gpu]") {
-  drape::GridDesc g;
+  drape::SheetDesc g;
   g.nx = 17;
   g.ny = 12;
-  const auto asset = drape::ClothAsset<float>::grid(g);
+  const auto asset = drape::ClothAsset<float>::sheet(g);
   const auto coloured = drape::gpu::colourFaces(asset.triangles, asset.vertexCount());
   REQUIRE(coloured.faces.size() == asset.triangles.size());
   CHECK(coloured.offsets.size() - 1 <= 8);  // a grid's vertex is in at most six faces
@@ -50,10 +50,10 @@ namespace {
 /// `place(origin)` gives the solid, poking into the cloth, whose local origin is `origin`.
 template <class Shape, class Place> void compareFacePass(Place&& place) {
   drape::test::gpuContext().makeCurrent();
-  drape::GridDesc g;
+  drape::SheetDesc g;
   g.nx = g.ny = 30;
   g.spacing = 0.02;
-  const auto asset = drape::ClothAsset<float>::grid(g);
+  const auto asset = drape::ClothAsset<float>::sheet(g);
   auto state = drape::ClothState<float>::fromAsset(asset, 0.1);
   for (Index i = 0; i < asset.vertexCount(); i += 11) state.invMass[std::size_t(i)] = 0;  // some fixed vertices
   const drape::Solid<Shape> placed = place(state.origin);
@@ -184,11 +184,11 @@ TEST_CASE("collide_faces: the GPU face pass against projectFaceContacts, colour 
 
 TEST_CASE("a cloth dropped on a ball: the GPU and CPU solvers agree on penetration, rest and drape", "[gpu]") {
   // The README's scene: a 20 x 20 cloth with 5 cm spacing falls from 1 m onto a 0.3 m ball (mu 0.5) and drapes.
-  drape::GridDesc grid;
+  drape::SheetDesc grid;
   grid.nx = grid.ny = 20;
   grid.spacing = 0.05;
   grid.placement.position = {0, 0, 1};
-  auto asset = std::make_shared<const drape::ClothAsset<float>>(drape::ClothAsset<float>::grid(grid));
+  auto asset = std::make_shared<const drape::ClothAsset<float>>(drape::ClothAsset<float>::sheet(grid));
   drape::Settings settings;
   drape::Solid<drape::Sphere> ball;
   ball.shape.radius = 0.3;
@@ -210,11 +210,11 @@ TEST_CASE("a cloth dropped on a ball: the GPU and CPU solvers agree on penetrati
 
 TEST_CASE("a picture shows the cloth where the camera looks, over the ground, under the sky", "[gpu]") {
   auto& context = drape::test::gpuContext();
-  drape::GridDesc grid;
+  drape::SheetDesc grid;
   grid.nx = grid.ny = 11;
   grid.spacing = 0.05;
   grid.placement.position = {0, 0, 0.2};
-  auto asset = std::make_shared<const drape::ClothAsset<float>>(drape::ClothAsset<float>::grid(grid));
+  auto asset = std::make_shared<const drape::ClothAsset<float>>(drape::ClothAsset<float>::sheet(grid));
   drape::gpu::Solver gpu(context, asset);
   drape::gpu::Renderer painter(context, 64, 48);
   drape::gpu::Camera camera;
@@ -384,11 +384,11 @@ void dropOnBoth(const std::shared_ptr<const drape::ClothAsset<float>>& asset, co
 }  // namespace
 
 TEST_CASE("a cloth dropped on a box, a capsule, a cylinder or a hull: GPU and CPU agree on penetration and drape", "[gpu]") {
-  drape::GridDesc grid;
+  drape::SheetDesc grid;
   grid.nx = grid.ny = 20;
   grid.spacing = 0.05;
   grid.placement.position = {0, 0, 1};
-  auto asset = std::make_shared<const drape::ClothAsset<float>>(drape::ClothAsset<float>::grid(grid));
+  auto asset = std::make_shared<const drape::ClothAsset<float>>(drape::ClothAsset<float>::sheet(grid));
   const Eigen::Quaterniond tilted(Eigen::AngleAxisd(0.4, Eigen::Vector3d(1, 1, 0).normalized()));
   auto run = [&](const auto& solid) { dropOnBoth(asset, solid, 90, 0.8); };
   SECTION("box, corner up") {
@@ -441,11 +441,11 @@ TEST_CASE("a cloth dropped on a box, a capsule, a cylinder or a hull: GPU and CP
 
 TEST_CASE("a cloth dropped on meshed solids (grid fields): GPU and CPU agree on penetration and drape", "[gpu]") {
   // The face search on a grid field is the projected gradient descent (a mesh may be non-convex).
-  drape::GridDesc grid;
+  drape::SheetDesc grid;
   grid.nx = grid.ny = 20;
   grid.spacing = 0.04;
   grid.placement.position = {0, 0, 0.5};
-  auto asset = std::make_shared<const drape::ClothAsset<float>>(drape::ClothAsset<float>::grid(grid));
+  auto asset = std::make_shared<const drape::ClothAsset<float>>(drape::ClothAsset<float>::sheet(grid));
   const bool torus = GENERATE(true, false);
   drape::Solid<drape::MeshShape> solid;
   solid.shape.grid = torus ? drape::buildDistanceGrid(drape::makeTorus(0.2, 0.07, 48, 24), {})

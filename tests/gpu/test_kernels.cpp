@@ -60,11 +60,11 @@ struct RandomVertices {
 
 /// A jittered 23 x 17 grid cloth stretched by 5 % (odd sizes: colours of uneven length, partial workgroups).
 std::shared_ptr<const drape::ClothAsset<float>> jitteredGrid() {
-  drape::GridDesc g;
+  drape::SheetDesc g;
   g.nx = 23;
   g.ny = 17;
   g.spacing = 0.02;
-  return std::make_shared<const drape::ClothAsset<float>>(drape::ClothAsset<float>::grid(g));
+  return std::make_shared<const drape::ClothAsset<float>>(drape::ClothAsset<float>::sheet(g));
 }
 
 }  // namespace

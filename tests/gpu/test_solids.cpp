@@ -172,13 +172,13 @@ TEST_CASE("a cloth folded into a V gutter of two planes: the GPU solver follows 
   // At 45 degrees the walls meet square and the two projections commute; at 60 the fold vertices are pushed
   // back into one wall by the other, so the settle placement and the reconciled split act every substep.
   c.wallDeg = GENERATE(45.0, 60.0);
-  c.settings.collisionMethod = GENERATE(drape::CollisionMethod::Improved, drape::CollisionMethod::Baseline);
+  c.settings.collisionMethod = GENERATE(drape::CollisionMethod::Faces, drape::CollisionMethod::InSolve);
   INFO("walls at " << c.wallDeg << " degrees, " << drape::toString(c.settings.collisionMethod));
-  drape::GridDesc grid;
+  drape::SheetDesc grid;
   grid.nx = c.nx;
   grid.ny = c.ny;
   grid.spacing = c.spacing;
-  auto asset = std::make_shared<const drape::ClothAsset<float>>(drape::ClothAsset<float>::grid(grid));
+  auto asset = std::make_shared<const drape::ClothAsset<float>>(drape::ClothAsset<float>::sheet(grid));
   drape::Solver<float> cpu(asset, c.settings);
   drape::gpu::Solver gpu(drape::test::gpuContext(), asset, c.settings);
   const double wall = c.wallDeg * std::numbers::pi / 180.0;
@@ -223,11 +223,11 @@ TEST_CASE("a cloth folded into a V gutter of two planes: the GPU solver follows 
 TEST_CASE("a cloth pinched between a ball and the floor, by a box's corner: GPU and CPU agree", "[gpu]") {
   // A cloth falls onto a ball and a tilted box that both rest on the floor and drapes down to it: vertices touch
   // two and three surfaces at once (ball and floor, box faces and floor), with friction.
-  drape::GridDesc grid;
+  drape::SheetDesc grid;
   grid.nx = grid.ny = 24;
   grid.spacing = 0.04;
   grid.placement.position = {0, 0, 0.5};
-  auto asset = std::make_shared<const drape::ClothAsset<float>>(drape::ClothAsset<float>::grid(grid));
+  auto asset = std::make_shared<const drape::ClothAsset<float>>(drape::ClothAsset<float>::sheet(grid));
   drape::Solver<float> cpu(asset, drape::Settings{}, 0.2);
   drape::gpu::Solver gpu(drape::test::gpuContext(), asset, drape::Settings{}, 0.2);
   drape::Solid<drape::Plane> floor;

@@ -23,13 +23,13 @@ struct Hanging {
   std::vector<Index> pinned;
 
   explicit Hanging(int iterations = 1, double stretchCompliance = 0) {
-    drape::GridDesc g;
+    drape::SheetDesc g;
     g.nx = 30;
     g.ny = 20;
     g.spacing = 0.02;
     g.placement.position = {0, 0, 1};
     g.placement.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(EIGEN_PI / 2, Eigen::Vector3d::UnitX()));  // the grid's y is up
-    asset = std::make_shared<const drape::ClothAsset<float>>(drape::ClothAsset<float>::grid(g));
+    asset = std::make_shared<const drape::ClothAsset<float>>(drape::ClothAsset<float>::sheet(g));
     settings.iterationCount = iterations;
     settings.stretchCompliance = stretchCompliance;
     settings.gravity = {2.0, 0, -9.81};
@@ -210,15 +210,15 @@ TEST_CASE("on the slope the GPU solver follows the CPU solver over 1 to 10 subst
   c.ny = 30;
   c.gap = 0.001;  // the uphill rows start inside the thickness: contacts from the first substep
   c.friction = GENERATE(0.0, 0.3, 1.0);  // sliding, slowed, stuck (tan 30 deg = 0.58)
-  c.method = GENERATE(drape::CollisionMethod::Improved, drape::CollisionMethod::Vertex,
-                      drape::CollisionMethod::Baseline);
+  c.method = GENERATE(drape::CollisionMethod::Faces, drape::CollisionMethod::Vertices,
+                      drape::CollisionMethod::InSolve);
   INFO("friction " << c.friction << ", " << drape::toString(c.method));
   for (int substeps : {1, 3, 10}) {
     INFO(substeps << " substeps");
     c.subSteps = substeps;
     drape::Solver<float> cpu = drape::scenes::makeSlope<float>(c);
     drape::gpu::Solver gpu = makeGpuSlope(c);
-    // Two steps, with contacts (the improved methods' in every substep of both; the baseline's in the first: it
+    // Two steps, with contacts (the faces and vertices methods' in every substep of both; the in-solve method's in the first: it
     // turns the uphill rows' push out of the thickness into velocity, and they leave the slope for a while).
     std::size_t touching = 0;
     for (int step = 0; step < 2; ++step) {
@@ -277,12 +277,12 @@ TEST_CASE("repulsion: a plane rising toward a cloth slows it alike on the GPU an
   // A horizontal cloth falls toward a floor that rises at 1 m/s into it, with a 5 cm repulsion region: the region
   // blends the vertices' velocities toward the floor's before contact (docs/design.md §5).
   const drape::Falloff falloff = GENERATE(drape::Falloff::Linear, drape::Falloff::Smooth);
-  drape::GridDesc grid;
+  drape::SheetDesc grid;
   grid.nx = 25;
   grid.ny = 20;
   grid.spacing = 0.02;
   grid.placement.position = {0, 0, 0.1};
-  auto asset = std::make_shared<const drape::ClothAsset<float>>(drape::ClothAsset<float>::grid(grid));
+  auto asset = std::make_shared<const drape::ClothAsset<float>>(drape::ClothAsset<float>::sheet(grid));
   drape::Solid<drape::Plane> floor;
   floor.motion = drape::Motion::Kinematic;
   floor.linearVelocity = {0, 0, 1};

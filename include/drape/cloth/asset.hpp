@@ -54,12 +54,13 @@ template <Scalar S> struct DistanceSet {
   Index lambdaCount() const { return std::max(size(), Index(blocks.size()) * DistanceBlock<S>::kLanes); }
 };
 
-/// A regular grid of nx by ny vertices in the local XY plane, centred on the pose's position.
-struct GridDesc {
+/// A rectangular sheet: a regular lattice of nx by ny vertices in the local XY plane, centred on the pose's
+/// position.
+struct SheetDesc {
   Index nx = 50;          ///< vertices along local x
   Index ny = 80;          ///< vertices along local y
   double spacing = 0.02;  ///< distance between neighbouring vertices (m)
-  Pose placement;         ///< where the grid's centre sits and how it is turned
+  Pose placement;         ///< where the sheet's centre sits and how it is turned
 };
 
 /// What to build besides stretch edges.
@@ -75,16 +76,16 @@ template <Scalar S> struct ClothAsset {
   std::vector<std::array<Index, 2>> bendPairs;   ///< the two far vertices of each interior edge
   std::vector<S> faceRestArea;                   ///< #F rest areas (m^2)
   DistanceSet<S> stretch;                        ///< structural edges
-  DistanceSet<S> shear;                          ///< grid diagonals (empty for meshes)
+  DistanceSet<S> shear;                          ///< the sheet's diagonals (empty for meshes)
   DistanceSet<S> bending;                        ///< bend pairs
   Adjacency vertexNeighbours;                    ///< vertices sharing an edge with each vertex
 
   Index vertexCount() const { return Index(restPositions.size()); }
   Index faceCount() const { return Index(triangles.size()); }
 
-  /// A grid of nx by ny vertices, quads split along alternating diagonals so the cloth has no preferred
+  /// A sheet of nx by ny vertices, quads split along alternating diagonals so the cloth has no preferred
   /// direction. Axis edges are stretch constraints, diagonals are shear.
-  static ClothAsset grid(const GridDesc& desc, const AssetOptions& options = {});
+  static ClothAsset sheet(const SheetDesc& desc, const AssetOptions& options = {});
 
   /// Any triangle mesh. positions: #V by 3 (m); triangles: #F by 3 vertex indices. Every edge is a stretch
   /// constraint. Rejects non-finite positions, out-of-range indices, repeated indices in a face, faces of
@@ -193,19 +194,19 @@ void finishAsset(ClothAsset<S>& asset, const std::vector<std::array<Index, 2>>* 
 
 }  // namespace detail
 
-template <Scalar S> ClothAsset<S> ClothAsset<S>::grid(const GridDesc& desc, const AssetOptions& options) {
-  detail::require(desc.nx >= 2 && desc.ny >= 2, "grid needs nx >= 2 and ny >= 2 (got " +
+template <Scalar S> ClothAsset<S> ClothAsset<S>::sheet(const SheetDesc& desc, const AssetOptions& options) {
+  detail::require(desc.nx >= 2 && desc.ny >= 2, "sheet needs nx >= 2 and ny >= 2 (got " +
                                                     std::to_string(desc.nx) + " x " + std::to_string(desc.ny) + ")");
-  detail::require(std::int64_t(desc.nx) * desc.ny <= (std::int64_t(1) << 26), "grid of " +
+  detail::require(std::int64_t(desc.nx) * desc.ny <= (std::int64_t(1) << 26), "sheet of " +
                       std::to_string(desc.nx) + " x " + std::to_string(desc.ny) + " vertices is too large");
   detail::require(std::isfinite(desc.spacing) && desc.spacing > 0 &&
                       desc.spacing * std::max(desc.nx, desc.ny) <= 1e5,
-                  "grid spacing must be positive, finite and the grid at most 1e5 m across (got spacing " +
+                  "sheet spacing must be positive, finite and the sheet at most 1e5 m across (got spacing " +
                       std::to_string(desc.spacing) + ")");
   detail::require(detail::allFinite(desc.placement.position) && desc.placement.position.cwiseAbs().maxCoeff() <= 1e7 &&
                       detail::allFinite(desc.placement.rotation.coeffs()) &&
                       std::abs(desc.placement.rotation.norm() - 1.0) < 1e-6,
-                  "grid placement must be finite, within 1e7 m of the world origin, with a unit quaternion");
+                  "sheet placement must be finite, within 1e7 m of the world origin, with a unit quaternion");
   ClothAsset asset;
   const Index nx = desc.nx, ny = desc.ny;
   auto id = [nx](Index i, Index j) { return j * nx + i; };

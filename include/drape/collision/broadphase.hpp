@@ -1,6 +1,6 @@
 #pragma once
 // The cloth side of the broad phase, for scenes with many bounded solids (many rigid bodies at linear cost per
-// body). The cloth's vertices are binned into a uniform grid (a counting sort), rebuilt when they have
+// body). The cloth's vertices are binned into the cells of a uniform lattice (VertexBins, a counting sort), rebuilt when they have
 // moved too far from where they were binned (below). A bounded solid's vertex pass then visits only the
 // vertices in the cells its box meets, grown by the thickness, and its face pass only the faces owned by them
 // (a face is owned by its first vertex, and every point of it lies within the face's reach of that vertex).
@@ -12,8 +12,8 @@
 //
 // Vertices move in every substep's prediction and solve and while contacts are resolved. The velocity update and
 // every contact pass report how far the vertices they moved have got from where they were binned; the largest
-// such distance since the grid was built (the drift) grows each query by as much, and past half a cell the grid
-// is rebuilt.
+// such distance since the bins were built (the drift) grows each query by as much, and past half a cell the bins
+// are rebuilt.
 
 #include <drape/math.hpp>
 
@@ -27,7 +27,7 @@
 
 namespace drape {
 
-template <Scalar S> class ClothGrid {
+template <Scalar S> class VertexBins {
  public:
   /// Once per topology: the faces each vertex owns, and the cell size.
   void setTopology(const std::vector<std::array<Index, 3>>& triangles, Index vertexCount, S cellSize) {
@@ -134,7 +134,7 @@ template <Scalar S> class ClothGrid {
   }
 
  private:
-  /// The cell of a point, clamped to the grid (a non-finite coordinate goes to cell 0).
+  /// The cell of a point, clamped to the lattice (a non-finite coordinate goes to cell 0).
   std::array<int, 3> cellAt(const Vec3<S>& p) const {
     std::array<int, 3> c{};
     for (int k = 0; k < 3; ++k) {

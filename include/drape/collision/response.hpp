@@ -459,7 +459,7 @@ void respondContacts(ContactBuffer<S>& contacts, Vec3<S>* x, const Vec3<S>* xPre
   }
 }
 
-/// Baseline friction: position-level Coulomb friction for every contact of the current solve pass.
+/// The in-solve method's friction: position-level Coulomb friction for every contact of the current solve pass.
 template <Scalar S> void applyContactFriction(const ContactBuffer<S>& contacts, Vec3<S>* x, const Vec3<S>* xPrev, S h) {
   const Index n = contacts.size();
   DRAPE_OMP(for schedule(static))

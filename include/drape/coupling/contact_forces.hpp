@@ -40,7 +40,7 @@ template <Scalar S> struct SubstepView {
 /// propagation gave vertices not in contact.
 inline bool passesPropagatedImpulse(const Settings& s) {
   return s.contactForce == ContactForce::Impulse && s.propagationRings > 0 && s.propagationWeight > 0 &&
-         s.collisionMethod == CollisionMethod::Improved;
+         s.collisionMethod == CollisionMethod::Faces;
 }
 
 /// What one substep's estimates add up to: the direct pushes go into `force` and `torque` (which hold the

@@ -7,13 +7,13 @@
 // colour, all iterations, with the XPBD multipliers when several passes meet a compliant set), the velocity
 // update, and against any number of solids (planes, spheres, boxes, capsules, cylinders, hulls and grid fields from
 // meshes, static, kinematic or dynamic, visited in the CPU solver's order: by shape type, then as added) the repulsion
-// region and the improved and vertex-only collision methods: per solid the vertex pass and the face pass
+// region and the faces and vertices collision methods: per solid the vertex pass and the face pass
 // (bounding-sphere cull and the search for the deepest point, cutting planes on convex fields and projected
 // gradient descent on a grid's, one dispatch per colour of faces that share no vertex), each vertex recording up
 // to three differently facing surfaces as the CPU does; where surfaces meet, the placement outside all of a
 // vertex's contact planes and the settle passes; the velocity split with Coulomb friction, per surface, then
 // reconciled; and propagation ring by ring; and the local origin following the cloth, as on the CPU; fixed
-// vertices (inverse mass 0) and pins with targets. Convex hulls, the baseline method and the two-way coupling with
+// vertices (inverse mass 0) and pins with targets. Convex hulls, the in-solve method and the two-way coupling with
 // dynamic bodies run too (see the kernels' list in README.md, "On the GPU"). The GPU always culls (boxes, bounding
 // spheres), whatever Settings::culling and broadPhase say: the contacts are the same.
 //
@@ -440,11 +440,11 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
     bodyTorque_[std::size_t(b)] += Eigen::Vector3d(s.directTorque[0], s.directTorque[1], s.directTorque[2]);
   }
 
-  /// All contacts of a substep (projectAllContacts): per solid the vertex pass, then (a curved solid, when
+  /// All contacts of a substep (projectAll, as on the CPU): per solid the vertex pass, then (a curved solid, when
   /// `faces`) the face pass; where surfaces meet, the placement outside all of a vertex's contact planes and,
   /// with several solids, the settle passes. The faces' buffer is bound here.
   void projectAll(bool faces) {
-    faces = faces && settings_.collisionMethod != CollisionMethod::Vertex;
+    faces = faces && settings_.collisionMethod != CollisionMethod::Vertices;
     if (faces) faces_.bind(layout::kFaces);
     for (std::size_t k = 0; k < passes_.size(); ++k) {
       vertexPass(passes_[k], k == 0, -1, 0.0f);
@@ -462,7 +462,7 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
     }
   }
 
-  /// The baseline method's collisions inside the solve (collideBaseline), on the positions the solve has reached:
+  /// CollisionMethod::InSolve's collisions inside the solve (collideInSolve, as on the CPU), on the positions the solve has reached:
   /// those go to the positions' buffer, the contacts are projected there (pinched vertices start from the
   /// prediction) with position friction, and the result goes back to the solve's.
   void collideInSolve(float h) {
@@ -564,7 +564,7 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
       pinKernel_.set(layout::kCount, unsigned(pins_.size()));
       pinKernel_.set(layout::kAlphaTilde, float(settings_.pinCompliance) / h2);
     }
-    const bool baseline = settings_.collisionMethod == CollisionMethod::Baseline && !passes_.empty();
+    const bool inSolve = settings_.collisionMethod == CollisionMethod::InSolve && !passes_.empty();
     for (int it = 0; it < iterations; ++it) {
       for (int s = 0; s < 3; ++s) {
         solve_.set(layout::kAlphaTilde, alphas[s]);
@@ -582,7 +582,7 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
         glDispatchCompute(1, 1, 1);
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
       }
-      if (baseline) collideInSolve(h);
+      if (inSolve) collideInSolve(h);
     }
 
     // 3. update velocity
@@ -591,9 +591,9 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
     update_.dispatch(n);
 
     // 4. collide (docs/design.md §3, §4): per solid, project vertices, then faces; where surfaces meet, settle;
-    //    split; propagate (collide on the CPU). The baseline method collided inside the solve instead.
+    //    split; propagate (as on the CPU). The in-solve method collided inside the solve instead.
     if (coupled_) copyVelocities(vPre_);  // before any contact acts
-    if (!passes_.empty() && !baseline) {
+    if (!passes_.empty() && !inSolve) {
       projectAll(true);
       respondAndPropagate(h);
     }
@@ -611,7 +611,7 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
     respond.set(layout::kInverseStep, 1.0f / h);
     respond.set(layout::kNormalDamping, float(settings_.normalDamping));
     respond.dispatch(n);
-    if (settings_.collisionMethod != CollisionMethod::Improved || settings_.propagationRings <= 0 ||
+    if (settings_.collisionMethod != CollisionMethod::Faces || settings_.propagationRings <= 0 ||
         !(settings_.propagationWeight > 0))
       return;
     glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
