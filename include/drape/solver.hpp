@@ -7,6 +7,7 @@
 #include <drape/cloth/integrate.hpp>
 #include <drape/cloth/state.hpp>
 #include <drape/collision/broadphase.hpp>
+#include <drape/collision/passes.hpp>
 #include <drape/collision/pgd.hpp>
 #include <drape/collision/response.hpp>
 #include <drape/constraints/distance.hpp>
@@ -51,20 +52,19 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     lambdaStretch_.resize(asset_->stretch.lambdaCount());
     lambdaShear_.resize(asset_->shear.lambdaCount());
     lambdaBending_.resize(asset_->bending.lambdaCount());
-    contacts_.resize(n);
     propagation_.resize(n);
     // Grid cells of two mean edge lengths: a cell holds a few vertices of a flat cloth.
     double edgeSum = 0;
     for (const auto& e : asset_->edges)
       edgeSum += double((asset_->restPositions[e[1]] - asset_->restPositions[e[0]]).norm());
     const double meanEdge = asset_->edges.empty() ? 1.0 : edgeSum / double(asset_->edges.size());
-    bins_.setTopology(asset_->triangles, n, S(2 * std::max(meanEdge, 1e-6)));
+    passes_.setTopology(asset_->triangles, n, S(2 * std::max(meanEdge, 1e-6)));
   }
 
   /// Collision work of the last substep.
-  const CollisionStats& stats() const { return stats_; }
+  const CollisionStats& stats() const { return passes_.stats(); }
   /// Contact records of the last substep (the faces and vertices methods).
-  const ContactBuffer<S>& contacts() const { return contacts_; }
+  const ContactBuffer<S>& contacts() const { return passes_.contacts(); }
 
  private:
   using Front::asset_;
@@ -80,7 +80,7 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
   // --- the front end's hooks (SolverFront) ------------------------------------------------------------------
   void loadState() const {}
   void storeState(StateChange change) {
-    if (change == StateChange::Positions) binsFresh_ = false;  // the bins' binned positions are not these
+    if (change == StateChange::Positions) passes_.positionsReplaced();
     if (change == StateChange::Masses) massesChanged_ = true;  // the lane copies are gathered again
   }
   static void checkSettings(const Settings&) {}  // the CPU runs every valid setting
@@ -96,7 +96,7 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     if (shift.isZero(0)) return;
     const Vec3<S> shiftS = shift.cast<S>();
     for (auto& p : state_.x) p -= shiftS;
-    binsFresh_ = false;
+    passes_.positionsReplaced();
   }
 
   template <class F> void forEachCompiled(F&& f) {
@@ -113,10 +113,7 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     lambdaPins_.resize(pins_.size());
     for (std::size_t k = 0; k < pins_.size(); ++k)
       pinLocal_[k] = {pins_[k].vertex, (pins_[k].target - state_.origin).template cast<S>()};
-    useBins_ = settings_.broadPhase && has.bounded > 0;
-    binsFresh_ = binsFresh_ && useBins_;  // bins not kept up in a substep without it is built anew
-    moveBound_ = 0;
-    contacts_.keepLines(coupled_);
+    passes_.prepare(settings_.broadPhase && has.bounded > 0, coupled_);
     if (coupled_ && vStart_.size() != state_.v.size()) {
       vStart_.resize(state_.v.size());
       vPre_.resize(state_.v.size());
@@ -130,7 +127,7 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
       gatherLaneMasses();
       massesChanged_ = false;
     }
-    stats_ = {};
+    passes_.resetStats();
     const int threads = settings_.threadCount == 0 ? hardwareThreads() : settings_.threadCount;
     // One team for the whole substep: the loops inside are work-shared, so the team is made once. One thread
     // opens no team: outside one the directives cost nothing, while a team of one still pays libgomp's barrier
@@ -143,35 +140,57 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     }
   }
 
+  /// One substep's stages (docs/design.md §1), run by every thread of the team.
   void subStepBody(const S h) {
-    const Index n = vertexCount();
-    Vec3<S>* x = state_.x.data();
-    Vec3<S>* v = state_.v.data();
-    Vec3<S>* x0 = xPrev_.data();
-    const S* w = state_.invMass.data();
-    const ClothAsset<S>& a = *asset_;
-
     // 0. repulsion (phase 1), only in a scene that declares it
     if (repulsive_) repel(S(settings_.thickness), h);
     if (coupled_) copyVelocities(vStart_);  // the estimators' velocity at the start of the substep
+    predict(h);
+    solve(h);
+    update(h);
+    // 4. collide
+    if (coupled_) copyVelocities(vPre_);  // before any contact acts
+    if (settings_.collisionMethod != CollisionMethod::InSolve) {
+      projectAll(S(settings_.thickness), settings_.collisionMethod == CollisionMethod::Faces);
+      respondAndPropagate(h);
+    }
+    // 5. the cloth's push on the coupled bodies, applied before they move (docs/design.md §6)
+    if (coupled_) {
+      DRAPE_OMP(single)
+      {
+        gatherContactForces(h, S(this->settings_.thickness));
+        for (std::size_t b = 0; b < this->bodies_.size(); ++b)
+          this->bodies_[b]->applyForceAndTorque(this->bodyForce_[b], this->bodyTorque_[b]);
+      }
+    }
+  }
 
-    // 1. predict, into the packed positions the solve works on (the start positions are kept aside only for
-    //    friction and the energy estimate, their readers after the velocity update)
+  /// 1. predict, into the packed positions the solve works on (the start positions are kept aside only for
+  ///    friction and the energy estimate, their readers after the velocity update)
+  void predict(const S h) {
     const Vec3<S> gh = (settings_.gravity * double(h)).template cast<S>();
+    Vec3<S>* x = state_.x.data();
+    Vec3<S>* v = state_.v.data();
+    Vec3<S>* x0 = xPrev_.data();
     Vec3<S>* xp = xPredicted_.data();
     Vec4<S>* xw = packed_.data();
-    if (hasFriction_ || coupled_)
-      predictPositions<true>(n, x, v, w, gh, h, x0, xp, xw);
-    else
-      predictPositions<false>(n, x, v, w, gh, h, x0, xp, xw);
+    const S* w = state_.invMass.data();
+    const Index n = vertexCount();
+    withFlags([&](auto keepStart) { predictPositions<keepStart()>(n, x, v, w, gh, h, x0, xp, xw); },
+              hasFriction_ || coupled_);
+  }
 
-    // 2. solve
+  /// 2. iterationCount passes over the constraints, set by set, then the pins; the in-solve method's contacts
+  ///    after each pass.
+  void solve(const S h) {
     const S h2 = h * h;
     const S stretchAlpha = S(settings_.stretchCompliance) / h2, shearAlpha = S(settings_.shearCompliance) / h2,
             bendingAlpha = S(settings_.bendingCompliance) / h2, pinAlpha = S(settings_.pinCompliance) / h2;
-    const S thickness = S(settings_.thickness);
     const bool inSolve = settings_.collisionMethod == CollisionMethod::InSolve;
     const int iterations = settings_.iterationCount;
+    const ClothAsset<S>& a = *asset_;
+    Vec3<S>* x = state_.x.data();
+    Vec4<S>* xw = packed_.data();
     if (iterations > 1) {  // one pass needs no multipliers (see solveDistanceSet)
       DRAPE_OMP(single)
       {
@@ -188,48 +207,39 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
         DRAPE_OMP(single)
         {
           if (it == 0) std::fill(lambdaPins_.begin(), lambdaPins_.end(), S(0));
-          solvePins(pinLocal_.data(), Index(pinLocal_.size()), pinAlpha, lambdaPins_.data(), xw, w);
+          solvePins(pinLocal_.data(), Index(pinLocal_.size()), pinAlpha, lambdaPins_.data(), xw,
+                    this->state_.invMass.data());
         }
       }
       if (inSolve) {  // contacts inside the solve, on the unpacked positions
         unpack(x, xw);
-        collideInSolve(h, thickness);
+        collideInSolve(h, S(settings_.thickness));
+        const Index n = vertexCount();
         DRAPE_OMP(for schedule(static))
         for (Index i = 0; i < n; ++i) xw[i].template head<3>() = x[i];
       }
     }
+  }
 
-    // 3. update velocity (updateVelocities). Where a vertex may touch several surfaces, the positions the
-    //    contacts start from are kept (in the prediction's buffer, free from here on) for the pinched vertices'
-    //    least-squares placement.
-    //    With the broad phase, the update also measures how far the vertices got from where the bins took them,
-    //    so the bins are rebuilt only when queries would have to grow too much.
+  /// 3. update velocity (updateVelocities). Where a vertex may touch several surfaces, the positions the
+  ///    contacts start from are kept (in the prediction's buffer, free from here on) for the pinched vertices'
+  ///    least-squares placement. With the broad phase, the update also measures how far the vertices got from
+  ///    where the bins took them, so the bins are rebuilt only when queries would have to grow too much.
+  void update(const S h) {
+    const Index n = vertexCount();
+    Vec3<S>* x = state_.x.data();
+    Vec3<S>* v = state_.v.data();
+    Vec3<S>* xp = xPredicted_.data();
+    Vec4<S>* xw = packed_.data();
     const S invH = S(1) / h;
-    if (useBins_ && binsFresh_) {
-      const S far = reconcile_ ? updateVelocities<true, true>(n, xw, xp, x, v, invH, bins_.binned())
-                               : updateVelocities<false, true>(n, xw, xp, x, v, invH, bins_.binned());
-      addMoveBound(moveBound_, std::sqrt(far));
+    if (passes_.measuresDrift()) {
+      const S far = withFlags(
+          [&](auto keep) { return updateVelocities<keep(), true>(n, xw, xp, x, v, invH, passes_.binned()); },
+          reconcile_);
+      passes_.addUpdateDrift(far);
       DRAPE_OMP(barrier)
-    } else if (reconcile_) {
-      updateVelocities<true, false>(n, xw, xp, x, v, invH);
     } else {
-      updateVelocities<false, false>(n, xw, xp, x, v, invH);
-    }
-
-    // 4. collide
-    if (coupled_) copyVelocities(vPre_);  // before any contact acts
-    if (!inSolve) {
-      projectAll(thickness, settings_.collisionMethod == CollisionMethod::Faces);
-      respondAndPropagate(h);
-    }
-
-    // 5. the cloth's push on the coupled bodies, applied before they move (docs/design.md §6)
-    if (coupled_) {
-      DRAPE_OMP(single)
-      {
-        gatherContactForces(h, thickness);
-        for (std::size_t b = 0; b < bodies_.size(); ++b) bodies_[b]->applyForceAndTorque(bodyForce_[b], bodyTorque_[b]);
-      }
+      withFlags([&](auto keep) { updateVelocities<keep(), false>(n, xw, xp, x, v, invH); }, reconcile_);
     }
   }
 
@@ -280,7 +290,7 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
   /// Phase 2 (docs/design.md §6): the cloth's pushes on the coupled bodies (coupling/contact_forces.hpp), each
   /// body's exchange shared with the vertices that made it (coupling/share.hpp), then the pinches' supports.
   void gatherContactForces(S h, S thickness) {
-    const coupling::SubstepView<S> view{contacts_,
+    const coupling::SubstepView<S> view{passes_.contacts(),
                                         state_,
                                         xPrev_.data(),
                                         vStart_.data(),
@@ -300,121 +310,25 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
   }
 
   void solveSet(const DistanceSet<S>& set, const LaneMasses<S>& lanes, S alpha, S* lambda, int iterations) {
-    if (iterations > 1 && alpha > S(0))
-      solveDistanceSet<true>(set, lanes, alpha, lambda, packed_.data(), state_.invMass.data());
-    else
-      solveDistanceSet<false>(set, lanes, alpha, lambda, packed_.data(), state_.invMass.data());
+    withFlags([&](auto useLambda) {
+      solveDistanceSet<useLambda()>(set, lanes, alpha, lambda, packed_.data(), state_.invMass.data());
+    }, iterations > 1 && alpha > S(0));
   }
 
-  /// Projects every vertex, then (when kFaces and the field is not linear) every face, out of each solid in
-  /// turn, recording the contacts. On a linear field a face is deepest at a vertex, which the vertex pass has
-  /// already handled. Vertices already within `slack` of the thickness are left where they are. With the broad
-  /// phase on, a bounded solid visits only the vertices and faces the bins find near its box.
-  template <bool kFaces, bool kCull> void projectContacts(S thickness, S slack = S(0)) {
-    Vec3<S>* x = state_.x.data();
-    const S* w = state_.invMass.data();
-    const Index n = vertexCount();
-    forEachCompiled([&](auto& list) {
-      for (const auto& solid : list) {
-        constexpr bool kFacePass = kFaces && !std::decay_t<decltype(solid.sdf)>::kLinear;
-        if (useBins_ && solid.bounded) {
-          DRAPE_OMP(single)
-          {
-            if (bins_.stale()) bins_.build(x, this->asset_->triangles);
-            bins_.vertices(x, solid.boxLow, solid.boxHigh, thickness, nearVertices_);
-          }
-          projectVertexContacts(solid, thickness, x, w, ItemList{nearVertices_.data()}, Index(nearVertices_.size()),
-                                contacts_, stats_, bins_.binned(), moveBound_, slack);
-          DRAPE_OMP(single)
-          {
-            bins_.noteDrift(moveBound_);
-            moveBound_ = 0;
-            if constexpr (kFacePass) {
-              bins_.faces(x, solid.boxLow, solid.boxHigh, thickness, nearFaces_);
-              bins_.noteDrift(projectFaceContacts<kCull, true>(
-                  solid, thickness, this->settings_.pgdIterations, this->asset_->triangles, ItemList{nearFaces_.data()},
-                  Index(nearFaces_.size()), x, w, contacts_, stats_, bins_.binned()));
-            }
-          }
-        } else {
-          // Without the bins, the binned positions are the positions: nothing drifts.
-          const Vec3<S>* binned = useBins_ ? bins_.binned() : x;
-          projectVertexContacts(solid, thickness, x, w, AllItems{}, n, contacts_, stats_, binned, moveBound_, slack);
-          if constexpr (kFacePass) {
-            DRAPE_OMP(single)
-            {
-              const S moved = projectFaceContacts<kCull>(solid, thickness, this->settings_.pgdIterations, this->asset_->triangles,
-                                                         AllItems{}, Index(this->asset_->triangles.size()), x, w, contacts_,
-                                                         stats_, binned);
-              if (useBins_) bins_.noteDrift(moved);
-            }
-          }
-          if (useBins_) {
-            DRAPE_OMP(single)
-            {
-              bins_.noteDrift(moveBound_);
-              moveBound_ = 0;
-            }
-          }
-        }
-      }
-    });
-  }
-
-  /// All contacts of a substep: the projections, then where surfaces meet (a crease, a box corner, a cloth
-  /// pinched between a ball and the floor) pushing a vertex out of one can put it back into another, so such
-  /// vertices go outside all their contact planes at once and, where several solids exist, the vertex passes
-  /// repeat on the true fields until no vertex moves by more than a ten-thousandth of the thickness.
+  /// All contacts of a substep (ContactPasses::projectAll).
   void projectAll(S thickness, bool faces) {
-    DRAPE_OMP(single)
-    {
-      contacts_.begin();
-      if (useBins_) {
-        bins_.noteDrift(moveBound_);  // the prediction's and the solve's moves (updateVelocities)
-        // The in-solve method collides inside the solve, before the update has measured the solve's moves.
-        const bool inSolve = settings_.collisionMethod == CollisionMethod::InSolve;
-        if (!binsFresh_ || inSolve || bins_.stale()) bins_.build(state_.x.data(), asset_->triangles);
-        binsFresh_ = true;
-      }
-      moveBound_ = 0;
-    }
-    if (faces && settings_.culling)
-      projectContacts<true, true>(thickness);
-    else if (faces)
-      projectContacts<true, false>(thickness);
-    else
-      projectContacts<false, false>(thickness);
-    if (!reconcile_) return;  // a lone plane gives each vertex one surface: nothing to reconcile
-    settleOntoContactPlanes();
-    if (solidCount() < 2) return;
-    for (int pass = 0; pass < constants::kSettlePasses; ++pass) {
-      // Every thread reads the count here, between two barriers (the one ending the loop above and the one
-      // ending the vertex pass below), so all take the same branch.
-      const auto before = stats_.vertexContacts;
-      DRAPE_OMP(barrier)
-      projectContacts<false, false>(thickness, S(constants::kSettleSlack) * thickness);
-      if (stats_.vertexContacts == before) break;
-      settleOntoContactPlanes();
-    }
-  }
-
-  void settleOntoContactPlanes() {
-    projectOntoContactPlanes(contacts_, state_.x.data(), xPredicted_.data(),
-                             useBins_ ? bins_.binned() : state_.x.data(), moveBound_);
-    if (useBins_) {
-      DRAPE_OMP(single)
-      {
-        bins_.noteDrift(moveBound_);
-        moveBound_ = 0;
-      }
-    }
+    const PassInputs<S> in{state_.x.data(),       state_.invMass.data(),        xPredicted_.data(),
+                           asset_->triangles,      thickness,                    settings_.pgdIterations,
+                           settings_.culling};
+    passes_.projectAll(compiled_, in, faces, reconcile_, solidCount(),
+                       settings_.collisionMethod == CollisionMethod::InSolve);
   }
 
   /// CollisionMethod::InSolve: the same vertex and face contacts, projected inside the solve pass, with
   /// position-level friction; the velocity update then turns every projection into velocity.
   void collideInSolve(S h, S thickness) {
     projectAll(thickness, true);
-    if (hasFriction_) applyContactFriction(contacts_, state_.x.data(), xPrev_.data(), h);
+    if (hasFriction_) applyContactFriction(passes_.contacts(), state_.x.data(), xPrev_.data(), h);
   }
 
   /// The velocity split with friction, then (with faces) propagation, after the contacts were projected.
@@ -423,12 +337,11 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     Vec3<S>* v = state_.v.data();
     const S* w = state_.invMass.data();
     const bool faces = settings_.collisionMethod == CollisionMethod::Faces;
-    if (hasFriction_)
-      respondContacts<true>(contacts_, x, xPrev_.data(), v, h, S(settings_.normalDamping));
-    else
-      respondContacts<false>(contacts_, x, xPrev_.data(), v, h, S(settings_.normalDamping));
+    withFlags([&](auto friction) {
+      respondContacts<friction()>(passes_.contacts(), x, xPrev_.data(), v, h, S(settings_.normalDamping));
+    }, hasFriction_);
     if (faces && settings_.propagationRings > 0 && settings_.propagationWeight > 0)
-      propagateCorrections(contacts_, propagation_, asset_->vertexNeighbours, v, w, S(settings_.propagationWeight),
+      propagateCorrections(passes_.contacts(), propagation_, asset_->vertexNeighbours, v, w, S(settings_.propagationWeight),
                            settings_.propagationRings);
   }
 
@@ -438,19 +351,13 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
   std::vector<Vec4<S>> packed_;   ///< (position, 0) of each vertex: what the constraint solve works on
   LaneMasses<S> laneMasses_[3];  ///< the stretch, shear and bending blocks' inverse masses (gatherLaneMasses)
   std::vector<S> lambdaStretch_, lambdaShear_, lambdaBending_, lambdaPins_;
-  ContactBuffer<S> contacts_;
+  ContactPasses<S> passes_;  ///< the contact records and the broad phase
   PropagationBuffer<S> propagation_;
-  CollisionStats stats_;
   bool hasFriction_ = false;  ///< some solid has friction this substep
   bool repulsive_ = false;    ///< some solid has a repulsion region this substep
   bool reconcile_ = false;    ///< a vertex may touch several surfaces this substep
   bool coupled_ = false;      ///< some solid is a dynamic body this substep
-  bool useBins_ = false;      ///< contacts with bounded solids go through the bins this substep
-  bool binsFresh_ = false;    ///< the bins were built, and every move since is in its drift
   bool massesChanged_ = false;  ///< an inverse mass changed since the lane copies were gathered
-  VertexBins<S> bins_;
-  std::vector<Index> nearVertices_, nearFaces_;  ///< what the bins found near the current solid
-  S moveBound_ = 0;  ///< the passes' largest vertex moves, summed (shared by the team)
   std::vector<Vec3<S>> vStart_, vPre_;                  ///< velocities at the substep's start, before contacts
   std::vector<coupling::BodySums> bodySums_;  ///< what each coupled body's exchange and pinches add up to
   std::vector<std::pair<Index, std::int32_t>> exchanged_;  ///< the vertices in an exchange, and its body

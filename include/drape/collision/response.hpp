@@ -231,10 +231,9 @@ template <class Shape, Scalar S, class Ids>
 void projectVertexContacts(const CompiledSolid<Shape, S>& solid, S thickness, Vec3<S>* x, const S* invMass, Ids ids,
                            Index count, ContactBuffer<S>& contacts, CollisionStats& stats, const Vec3<S>* binned,
                            S& moveBound, S slack = S(0)) {
-  if (solid.motion.body >= 0)
-    projectVertexContactsAs<true>(solid, thickness, x, invMass, ids, count, contacts, stats, binned, moveBound, slack);
-  else
-    projectVertexContactsAs<false>(solid, thickness, x, invMass, ids, count, contacts, stats, binned, moveBound, slack);
+  withFlags([&](auto body) {
+    projectVertexContactsAs<body()>(solid, thickness, x, invMass, ids, count, contacts, stats, binned, moveBound, slack);
+  }, solid.motion.body >= 0);
 }
 
 /// For every face: cull by bounding sphere (when kCull), find the deepest point by PGD, and if it is closer
@@ -297,11 +296,10 @@ template <bool kCull, bool kBoxed = false, class Shape, Scalar S, class Ids>
 S projectFaceContacts(const CompiledSolid<Shape, S>& solid, S thickness, int pgdIterations,
                       const std::vector<std::array<Index, 3>>& triangles, Ids ids, Index count, Vec3<S>* x,
                       const S* invMass, ContactBuffer<S>& contacts, CollisionStats& stats, const Vec3<S>* binned) {
-  if (solid.motion.body >= 0)
-    return projectFaceContactsAs<kCull, true, kBoxed>(solid, thickness, pgdIterations, triangles, ids, count, x,
-                                                      invMass, contacts, stats, binned);
-  return projectFaceContactsAs<kCull, false, kBoxed>(solid, thickness, pgdIterations, triangles, ids, count, x,
-                                                     invMass, contacts, stats, binned);
+  return withFlags([&](auto body) {
+    return projectFaceContactsAs<kCull, body(), kBoxed>(solid, thickness, pgdIterations, triangles, ids, count, x,
+                                                        invMass, contacts, stats, binned);
+  }, solid.motion.body >= 0);
 }
 
 

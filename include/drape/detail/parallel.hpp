@@ -22,6 +22,8 @@
 #define DRAPE_ALWAYS_INLINE inline
 #endif
 
+#include <type_traits>
+
 namespace drape {
 
 /// How many threads a solver with threadCount 0 uses: OpenMP's default team size, or 1 without OpenMP.
@@ -31,6 +33,15 @@ inline int hardwareThreads() {
 #else
   return 1;
 #endif
+}
+
+/// Calls f with each runtime flag as a std::bool_constant, so that a kernel templated on a scene's features is
+/// compiled once per combination and the choice is made once, outside its per-vertex loop:
+///   withFlags([&](auto friction) { respond<decltype(friction)::value>(...); }, hasFriction);
+template <class F> decltype(auto) withFlags(F&& f) { return f(); }
+template <class F, class... Rest> decltype(auto) withFlags(F&& f, bool flag, Rest... rest) {
+  if (flag) return withFlags([&](auto... more) -> decltype(auto) { return f(std::true_type{}, more...); }, rest...);
+  return withFlags([&](auto... more) -> decltype(auto) { return f(std::false_type{}, more...); }, rest...);
 }
 
 /// Whether drape was compiled with OpenMP (threadCount above 1 has an effect).

@@ -1,0 +1,174 @@
+#pragma once
+// The contact stage of a substep (docs/design.md §4, §13, §16): every solid's vertex pass, then its face pass
+// (a curved solid's, with faces on), through the broad phase's bins for bounded solids; where surfaces meet,
+// the placement outside all of a vertex's contact planes and the settle passes. It owns the contact records,
+// the bins and the bookkeeping of how far the vertices have moved since they were binned. Called by every
+// thread of the solver's team (its loops are work-shared).
+
+#include <drape/collision/broadphase.hpp>
+#include <drape/collision/response.hpp>
+#include <drape/detail/parallel.hpp>
+#include <drape/kernel_constants.hpp>
+
+#include <array>
+#include <tuple>
+#include <vector>
+
+namespace drape {
+
+/// What the passes read of the cloth and the settings in one substep.
+template <Scalar S> struct PassInputs {
+  Vec3<S>* x;                  ///< positions, moved out of the solids
+  const S* invMass;
+  const Vec3<S>* settleStart;  ///< where a pinched vertex's least-squares placement starts (the prediction)
+  const std::vector<std::array<Index, 3>>& triangles;
+  S thickness;
+  int pgdIterations;
+  bool culling;
+};
+
+template <Scalar S> class ContactPasses {
+ public:
+  /// Sizes the records and the bins for a cloth of `vertexCount` vertices; cells of `cell` metres.
+  void setTopology(const std::vector<std::array<Index, 3>>& triangles, Index vertexCount, S cell) {
+    contacts_.resize(vertexCount);
+    bins_.setTopology(triangles, vertexCount, cell);
+  }
+
+  /// Before a substep: whether contacts with bounded solids go through the bins, and whether to keep the
+  /// records' lines of action (a scene with coupled bodies).
+  void prepare(bool useBins, bool keepLines) {
+    useBins_ = useBins;
+    binsFresh_ = binsFresh_ && useBins_;  // bins not kept up in a substep without them are built anew
+    moveBound_ = 0;
+    contacts_.keepLines(keepLines);
+  }
+  /// The positions were replaced: the bins no longer know where the vertices are.
+  void positionsReplaced() { binsFresh_ = false; }
+  /// Whether the velocity update should measure how far the vertices got from where the bins took them.
+  bool measuresDrift() const { return useBins_ && binsFresh_; }
+  const Vec3<S>* binned() const { return bins_.binned(); }
+  /// The velocity update's largest squared distance from the binned positions, on each thread.
+  void addUpdateDrift(S farSquared) { addMoveBound(moveBound_, std::sqrt(farSquared)); }
+
+  /// All contacts of a substep with the solids of `compiled` (a tuple of vectors of CompiledSolid): the
+  /// projections, then, where surfaces meet (a crease, a box corner, a cloth pinched between a ball and the
+  /// floor) and pushing a vertex out of one can put it back into another, such vertices go outside all their
+  /// contact planes at once (`reconcile`) and, where several solids exist, the vertex passes repeat on the true
+  /// fields until no vertex moves by more than kSettleSlack of the thickness. `rebuild` builds the bins anew
+  /// (contacts inside the solve come before the update has measured the solve's moves).
+  template <class Solids>
+  void projectAll(const Solids& compiled, const PassInputs<S>& in, bool faces, bool reconcile, Index solidCount,
+                  bool rebuild) {
+    DRAPE_OMP(single)
+    {
+      contacts_.begin();
+      if (useBins_) {
+        bins_.noteDrift(moveBound_);  // the prediction's and the solve's moves (updateVelocities)
+        if (!binsFresh_ || rebuild || bins_.stale()) bins_.build(in.x, in.triangles);
+        binsFresh_ = true;
+      }
+      moveBound_ = 0;
+    }
+    withFlags([&](auto withFaces, auto cull) { project<withFaces(), withFaces() && cull()>(compiled, in); }, faces,
+              in.culling);
+    if (!reconcile) return;  // a lone plane gives each vertex one surface: nothing to reconcile
+    settle(in);
+    if (solidCount < 2) return;
+    for (int pass = 0; pass < constants::kSettlePasses; ++pass) {
+      // Every thread reads the count here, between two barriers (the one ending the loop above and the one
+      // ending the vertex pass below), so all take the same branch.
+      const auto before = stats_.vertexContacts;
+      DRAPE_OMP(barrier)
+      project<false, false>(compiled, in, S(constants::kSettleSlack) * in.thickness);
+      if (stats_.vertexContacts == before) break;
+      settle(in);
+    }
+  }
+
+  const ContactBuffer<S>& contacts() const { return contacts_; }
+  ContactBuffer<S>& contacts() { return contacts_; }
+  const CollisionStats& stats() const { return stats_; }
+  void resetStats() { stats_ = {}; }
+
+ private:
+  /// Projects every vertex, then (when kFaces and the field is not linear) every face, out of each solid in
+  /// turn, recording the contacts. On a linear field a face is deepest at a vertex, which the vertex pass has
+  /// already handled. Vertices already within `slack` of the thickness are left where they are. With the bins
+  /// on, a bounded solid visits only the vertices and faces they find near its box.
+  template <bool kFaces, bool kCull, class Solids> void project(const Solids& compiled, const PassInputs<S>& in,
+                                                                S slack = S(0)) {
+    const Index n = Index(contacts_.slotCount.size());
+    std::apply([&](const auto&... lists) { (projectList<kFaces, kCull>(lists, in, slack, n), ...); }, compiled);
+  }
+
+  template <bool kFaces, bool kCull, class List>
+  void projectList(const List& list, const PassInputs<S>& in, S slack, Index n) {
+    Vec3<S>* x = in.x;
+    const S* w = in.invMass;
+    const S thickness = in.thickness;
+    for (const auto& solid : list) {
+      constexpr bool kFacePass = kFaces && !std::decay_t<decltype(solid.sdf)>::kLinear;
+      if (useBins_ && solid.bounded) {
+        DRAPE_OMP(single)
+        {
+          if (bins_.stale()) bins_.build(x, in.triangles);
+          bins_.vertices(x, solid.boxLow, solid.boxHigh, thickness, nearVertices_);
+        }
+        projectVertexContacts(solid, thickness, x, w, ItemList{nearVertices_.data()}, Index(nearVertices_.size()),
+                              contacts_, stats_, bins_.binned(), moveBound_, slack);
+        DRAPE_OMP(single)
+        {
+          bins_.noteDrift(moveBound_);
+          moveBound_ = 0;
+          if constexpr (kFacePass) {
+            bins_.faces(x, solid.boxLow, solid.boxHigh, thickness, nearFaces_);
+            bins_.noteDrift(projectFaceContacts<kCull, true>(solid, thickness, in.pgdIterations, in.triangles,
+                                                             ItemList{nearFaces_.data()}, Index(nearFaces_.size()), x,
+                                                             w, contacts_, stats_, bins_.binned()));
+          }
+        }
+      } else {
+        // Without the bins, the binned positions are the positions: nothing drifts.
+        const Vec3<S>* binned = useBins_ ? bins_.binned() : x;
+        projectVertexContacts(solid, thickness, x, w, AllItems{}, n, contacts_, stats_, binned, moveBound_, slack);
+        if constexpr (kFacePass) {
+          DRAPE_OMP(single)
+          {
+            const S moved = projectFaceContacts<kCull>(solid, thickness, in.pgdIterations, in.triangles, AllItems{},
+                                                       Index(in.triangles.size()), x, w, contacts_, stats_, binned);
+            if (useBins_) bins_.noteDrift(moved);
+          }
+        }
+        if (useBins_) {
+          DRAPE_OMP(single)
+          {
+            bins_.noteDrift(moveBound_);
+            moveBound_ = 0;
+          }
+        }
+      }
+    }
+  }
+
+  void settle(const PassInputs<S>& in) {
+    projectOntoContactPlanes(contacts_, in.x, in.settleStart, useBins_ ? bins_.binned() : in.x, moveBound_);
+    if (useBins_) {
+      DRAPE_OMP(single)
+      {
+        bins_.noteDrift(moveBound_);
+        moveBound_ = 0;
+      }
+    }
+  }
+
+  ContactBuffer<S> contacts_;
+  CollisionStats stats_;
+  VertexBins<S> bins_;
+  std::vector<Index> nearVertices_, nearFaces_;  ///< what the bins found near the current solid
+  S moveBound_ = 0;         ///< the passes' largest vertex moves, summed (shared by the team)
+  bool useBins_ = false;    ///< contacts with bounded solids go through the bins this substep
+  bool binsFresh_ = false;  ///< the bins were built, and every move since is in their drift
+};
+
+}  // namespace drape
