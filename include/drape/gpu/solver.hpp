@@ -25,9 +25,8 @@
 
 #include <drape/cloth/asset.hpp>
 #include <drape/cloth/state.hpp>
-#include <drape/coupling/contact_forces.hpp>
-#include <drape/coupling/share.hpp>
 #include <drape/front_end.hpp>
+#include <drape/gpu/coupling.hpp>
 #include <drape/gpu/program.hpp>
 #include <drape/gpu/shapes.hpp>
 #include <drape/gpu/shader_sources.hpp>
@@ -106,10 +105,7 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
         translate_("translate", shaders::translate),
         pinKernel_("pins", shaders::pins),
         settle_("settle", shaders::settle),
-        frictionKernel_("friction", shaders::friction),
-        contactForces_("contact_forces", shaders::contact_forces),
-        bodySumKernel_("body_sums", shaders::body_sums),
-        shareKernel_("share", shaders::share) {
+        frictionKernel_("friction", shaders::friction) {
     // The three sets, colour by colour, in one buffer: set s's colour c starts at offset_[s] + colourOffsets[c].
     std::vector<layout::Constraint> constraints;
     const DistanceSet<float>* sets[3] = {&asset_->stretch, &asset_->shear, &asset_->bending};
@@ -292,18 +288,7 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
     repulsive_ = has.repulsion;
     reconcile_ = has.reconcile;
     coupled_ = has.coupled;
-    if (coupled_ && bodySums_.size() != bodies_.size()) {
-      bodyData_.assign(std::vector<layout::Body>(bodies_.size()));
-      bodySums_.assign(std::vector<layout::BodySum>(bodies_.size()));
-      shares_.assign(std::vector<float>(bodies_.size(), 1.0f));
-    }
-    if (coupled_ && vStart_.size() != state_.x.size()) {  // the coupling's buffers, once a scene has a body
-      const std::vector<layout::Vertex> zero(state_.x.size(), layout::Vertex{0, 0, 0, 0});
-      vStart_.assign(zero);
-      vPre_.assign(zero);
-      lines_.assign(std::vector<layout::Lines>(zero.size(), layout::Lines{}));
-      pushes_.assign(std::vector<layout::BodyPush>(zero.size() * layout::kContactSlots, layout::BodyPush{}));
-    }
+    if (coupled_) coupling_.reserve(state_.x.size(), bodies_.size());  // the coupling's buffers, once it has a body
   }
 
   /// A kernel's uniforms for one solid (its field and motion; for a collision kernel, `collide`, its friction and
@@ -356,86 +341,11 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
     settle_.dispatch(std::size_t(vertexCount()));
   }
 
-  /// v into `to` (the estimators' velocities at the substep's start and before the contacts).
-  void copyVelocities(const Buffer<layout::Vertex>& to) {
-    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
-    glCopyNamedBufferSubData(velocities_.id(), to.id(), 0, 0,
-                             GLsizeiptr(std::size_t(vertexCount()) * sizeof(layout::Vertex)));
-  }
-
-  /// Phase 2 (docs/design.md §6, gatherContactForces): the pushes of every vertex (contact_forces.comp), summed
-  /// per body in double (body_sums.comp); the sums (192 bytes a body) are read back, each body's exchange shared
-  /// with the vertices that made it (shareExchanges: share.comp scales those vertices' changes where a body took less
-  /// than all), and the forces applied to the bodies before they move.
-  void gatherContactForces(float h) {
-    const auto n = unsigned(vertexCount());
-    const std::size_t nb = bodies_.size();
-    std::vector<layout::Body> data(nb);
-    for (std::size_t b = 0; b < nb; ++b) {
-      const CoupledBody& body = *bodies_[b];
-      const Vec3<float> c = (bodyCentre_[b] - state_.origin).cast<float>();
-      const Vec3<float> lin = body.linearVelocity().cast<float>(), ang = body.angularVelocity().cast<float>();
-      const Eigen::Matrix3f inertia = body.inverseInertiaWorld().cast<float>();
-      layout::Body& d = data[b];
-      d = layout::Body{{c.x(), c.y(), c.z(), float(body.inverseMass())}, {lin.x(), lin.y(), lin.z(), 0},
-                       {ang.x(), ang.y(), ang.z(), 0}, {}};
-      for (int r = 0; r < 3; ++r)
-        for (int k = 0; k < 3; ++k) d.inverseInertia[r][k] = inertia(r, k);
-    }
-    bodyData_.write(data);
-    bodyData_.bind(layout::kBodies);
-    const ContactForce estimator = settings_.contactForce;
-    const bool propagated = coupling::passesPropagatedImpulse(settings_);
-    contactForces_.set(layout::kCount, n);
-    contactForces_.set(layout::kStep, h);
-    contactForces_.set(layout::kThickness, float(settings_.thickness));
-    glProgramUniform1i(contactForces_.id(), layout::kEstimator,
-                       estimator == ContactForce::SubForce ? layout::kSubForce
-                       : estimator == ContactForce::Energy ? layout::kEnergy
-                                                           : layout::kImpulse);
-    contactForces_.set(layout::kNormalOnly, unsigned(settings_.normalForceOnly));
-    contactForces_.set(layout::kPropagated, unsigned(propagated));
-    contactForces_.dispatch(n);
-    const std::vector<layout::BodySum> sums = sumPushes(0, int(bodies_.size()));
-    std::vector<float> share(nb, 1.0f);
-    bool partial = false;
-    for (std::size_t b = 0; b < nb; ++b) {
-      const layout::BodySum& sum = sums[b];
-      auto vec = [](const double* v) { return Eigen::Vector3d(v[0], v[1], v[2]); };
-      CoupledBody& body = *bodies_[b];
-      const Eigen::Vector3d ef = vec(sum.exchangeForce), et = vec(sum.exchangeTorque);
-      const double s = coupling::exchangeShare(body, ef, et, sum.exchangeForce[3]);
-      Eigen::Vector3d force = bodyForce_[b] + vec(sum.directForce) + s * ef;  // after the repulsion's
-      Eigen::Vector3d torque = bodyTorque_[b] + vec(sum.directTorque) + s * et;
-      if (sum.pinchForce[3] > 0) force += vec(sum.pinchForce) / sum.pinchForce[3], torque += vec(sum.pinchTorque) / sum.pinchForce[3];
-      body.applyForceAndTorque(force, torque);
-      bodyForce_[b] = force;
-      bodyTorque_[b] = torque;
-      share[b] = float(s);
-      partial = partial || s < 1;
-    }
-    if (!partial) return;
-    shares_.write(share);
-    shareKernel_.set(layout::kCount, n);
-    shareKernel_.dispatch(n);
-  }
-
-  /// The pushes every vertex wrote (pushes_) to bodies [first, first + count), summed per body in double
-  /// (body_sums.comp: a workgroup per body, each reading every vertex's pushes) and read back.
-  std::vector<layout::BodySum> sumPushes(int first, int count) {
-    bodySumKernel_.set(layout::kCount, unsigned(vertexCount()));
-    glProgramUniform1i(bodySumKernel_.id(), layout::kBody, first);
-    glUseProgram(bodySumKernel_.id());
-    glDispatchCompute(GLuint(count), 1, 1);
-    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
-    return bodySums_.read(std::size_t(first), std::size_t(count));
-  }
-
   /// What coupled body b's repulsion region took from or gave the vertices, reversed onto the body
   /// (gatherRepulsionForces): the pushes its repel kernel wrote (to b alone), summed, start the substep's force
   /// and torque. Only b's sum is made and read: a pass over the vertices per repelling body.
   void gatherRepulsionForces(int b) {
-    const layout::BodySum s = sumPushes(b, 1)[0];
+    const layout::BodySum s = coupling_.sumPushes(b, 1, unsigned(vertexCount()))[0];
     bodyForce_[std::size_t(b)] += Eigen::Vector3d(s.directForce[0], s.directForce[1], s.directForce[2]);
     bodyTorque_[std::size_t(b)] += Eigen::Vector3d(s.directTorque[0], s.directTorque[1], s.directTorque[2]);
   }
@@ -481,11 +391,35 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
     glCopyNamedBufferSubData(positions_.id(), packed_.id(), 0, 0, bytes);
   }
 
+  /// One substep's stages (docs/design.md §1), each a dispatch or a few.
   void subStep(double hd) {
     context_->makeCurrent();  // an observer of the last substep may have made another context current
     const float h = float(hd);
-    const auto n = unsigned(vertexCount());
     prepareSolids(hd);
+    bindBuffers();
+    if (repulsive_) repel(h);  // 0. repulsion (phase 1), for each solid that has a region
+    if (coupled_) coupling_.keepStartVelocities(velocities_, state_.x.size());
+    predict(h);
+    const bool inSolve = settings_.collisionMethod == CollisionMethod::InSolve && !passes_.empty();
+    solve(h, inSolve);
+    update_.set(layout::kCount, unsigned(vertexCount()));  // 3. update velocity
+    update_.set(layout::kInverseStep, 1.0f / h);
+    update_.dispatch(std::size_t(vertexCount()));
+    // 4. collide (docs/design.md §3, §4): per solid, project vertices, then faces; where surfaces meet, settle;
+    //    split; propagate (as on the CPU). The in-solve method collided inside the solve instead.
+    if (coupled_) coupling_.keepPreContactVelocities(velocities_, state_.x.size());
+    if (!passes_.empty() && !inSolve) {
+      projectAll(true);
+      respondAndPropagate(h);
+    }
+    // 5. the cloth's push on the coupled bodies, applied before they move (docs/design.md §6)
+    if (coupled_)
+      coupling_.gather(bodies_, bodyCentre_, state_.origin, settings_, h, unsigned(vertexCount()), bodyForce_,
+                       bodyTorque_);
+    fresh_ = false;  // the CPU copy of the state is behind now
+  }
+
+  void bindBuffers() const {
     positions_.bind(layout::kPositions);
     velocities_.bind(layout::kVelocities);
     predicted_.bind(layout::kPredicted);
@@ -498,45 +432,42 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
     neighbours_.bind(layout::kNeighbours);
     rings_.bind(layout::kPropagation);
     flags_.bind(layout::kFlags);
-    if (coupled_) {
-      bodySums_.bind(layout::kBodySums);
-      shares_.bind(layout::kShares);
-      vStart_.bind(layout::kVStart);
-      vPre_.bind(layout::kVPre);
-      lines_.bind(layout::kLines);
-      pushes_.bind(layout::kPushes);
-    }
+    if (coupled_) coupling_.bind();
+  }
 
-    // 0. repulsion (phase 1), for each solid that has a region
-    if (repulsive_) {
-      for (const SolidPass& p : passes_) {
-        if (!(p.repulsionRadius > 0)) continue;
-        const bool body = p.motion.body >= 0;
-        const Program& k = body ? kernels_[p.code].repelBody : kernels_[p.code].repel;
-        setSolidUniforms(k, p, false);
-        k.set(layout::kCount, n);
-        glProgramUniform2f(k.id(), layout::kRepulsion, 1.0f / p.repulsionRadius,
-                           p.falloff == Falloff::Smooth ? 1.0f : 0.0f);
-        if (body) {
-          k.set(layout::kStep, h);
-          k.set(layout::kNormalOnly, unsigned(settings_.normalForceOnly));
-        }
-        k.dispatch(n);
-        if (body) gatherRepulsionForces(p.motion.body);
+  void repel(float h) {
+    const auto n = unsigned(vertexCount());
+    for (const SolidPass& p : passes_) {
+      if (!(p.repulsionRadius > 0)) continue;
+      const bool body = p.motion.body >= 0;
+      const Program& k = body ? kernels_[p.code].repelBody : kernels_[p.code].repel;
+      setSolidUniforms(k, p, false);
+      k.set(layout::kCount, n);
+      glProgramUniform2f(k.id(), layout::kRepulsion, 1.0f / p.repulsionRadius,
+                         p.falloff == Falloff::Smooth ? 1.0f : 0.0f);
+      if (body) {
+        k.set(layout::kStep, h);
+        k.set(layout::kNormalOnly, unsigned(settings_.normalForceOnly));
       }
+      k.dispatch(n);
+      if (body) gatherRepulsionForces(p.motion.body);
     }
+  }
 
-    if (coupled_) copyVelocities(vStart_);  // the estimators' velocity at the start of the substep
-
-    // 1. predict
+  /// 1. predict
+  void predict(float h) {
+    const auto n = unsigned(vertexCount());
     const Vec3<float> gh = (settings_.gravity * double(h)).cast<float>();
     predict_.set(layout::kCount, n);
     predict_.set(layout::kStep, h);
     predict_.set(layout::kGravityStep, gh.x(), gh.y(), gh.z());
     predict_.set(layout::kKeepStart, unsigned(friction_ || coupled_));
     predict_.dispatch(n);
+  }
 
-    // 2. solve, set by set and colour by colour, as the CPU solver orders them
+  /// 2. solve, set by set and colour by colour, as the CPU solver orders them; then the pins, and the in-solve
+  ///    method's contacts after each pass.
+  void solve(float h, bool inSolve) {
     const float h2 = h * h;
     const float alphas[3] = {float(settings_.stretchCompliance) / h2, float(settings_.shearCompliance) / h2,
                              float(settings_.bendingCompliance) / h2};
@@ -546,25 +477,7 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
       glClearNamedBufferData(lambdas_.id(), GL_R32F, GL_RED, GL_FLOAT, nullptr);
     }
     const DistanceSet<float>* sets[3] = {&asset_->stretch, &asset_->shear, &asset_->bending};
-    if (!pins_.empty()) {  // the targets in this substep's local frame, and the pins' multipliers zeroed
-      std::vector<layout::PinSlot> slots(pins_.size());
-      for (std::size_t k = 0; k < pins_.size(); ++k) {
-        const Vec3<float> t = (pins_[k].target - state_.origin).cast<float>();
-        slots[k] = {{t.x(), t.y(), t.z()}, std::uint32_t(pins_[k].vertex)};
-      }
-      if (pinSlots_.size() != slots.size()) {
-        pinSlots_.assign(slots);
-        pinLambdas_.assign(std::vector<float>(slots.size(), 0.0f));
-      } else {
-        pinSlots_.write(slots);
-      }
-      glClearNamedBufferData(pinLambdas_.id(), GL_R32F, GL_RED, GL_FLOAT, nullptr);
-      pinSlots_.bind(layout::kPins);
-      pinLambdas_.bind(layout::kPinLambdas);
-      pinKernel_.set(layout::kCount, unsigned(pins_.size()));
-      pinKernel_.set(layout::kAlphaTilde, float(settings_.pinCompliance) / h2);
-    }
-    const bool inSolve = settings_.collisionMethod == CollisionMethod::InSolve && !passes_.empty();
+    if (!pins_.empty()) uploadPins(float(settings_.pinCompliance) / h2);
     for (int it = 0; it < iterations; ++it) {
       for (int s = 0; s < 3; ++s) {
         solve_.set(layout::kAlphaTilde, alphas[s]);
@@ -584,22 +497,26 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
       }
       if (inSolve) collideInSolve(h);
     }
+  }
 
-    // 3. update velocity
-    update_.set(layout::kCount, n);
-    update_.set(layout::kInverseStep, 1.0f / h);
-    update_.dispatch(n);
-
-    // 4. collide (docs/design.md §3, §4): per solid, project vertices, then faces; where surfaces meet, settle;
-    //    split; propagate (as on the CPU). The in-solve method collided inside the solve instead.
-    if (coupled_) copyVelocities(vPre_);  // before any contact acts
-    if (!passes_.empty() && !inSolve) {
-      projectAll(true);
-      respondAndPropagate(h);
+  /// The pins' targets in this substep's local frame, and their multipliers zeroed.
+  void uploadPins(float alphaTilde) {
+    std::vector<layout::PinSlot> slots(pins_.size());
+    for (std::size_t k = 0; k < pins_.size(); ++k) {
+      const Vec3<float> t = (pins_[k].target - state_.origin).cast<float>();
+      slots[k] = {{t.x(), t.y(), t.z()}, std::uint32_t(pins_[k].vertex)};
     }
-    // 5. the cloth's push on the coupled bodies, applied before they move (docs/design.md §6)
-    if (coupled_) gatherContactForces(h);
-    fresh_ = false;  // the CPU copy of the state is behind now
+    if (pinSlots_.size() != slots.size()) {
+      pinSlots_.assign(slots);
+      pinLambdas_.assign(std::vector<float>(slots.size(), 0.0f));
+    } else {
+      pinSlots_.write(slots);
+    }
+    glClearNamedBufferData(pinLambdas_.id(), GL_R32F, GL_RED, GL_FLOAT, nullptr);
+    pinSlots_.bind(layout::kPins);
+    pinLambdas_.bind(layout::kPinLambdas);
+    pinKernel_.set(layout::kCount, unsigned(pins_.size()));
+    pinKernel_.set(layout::kAlphaTilde, alphaTilde);
   }
 
   /// The velocity split, then propagation (collide's second half).
@@ -668,14 +585,9 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
   std::vector<ShapeData> shapeData_;  ///< every grid and hull the solids use, uploaded once each
   Buffer<std::uint32_t> flags_;   ///< per settle pass: whether its vertex passes found a contact
   bool coupled_ = false;          ///< some solid is a dynamic body this substep
-  Buffer<layout::Vertex> vStart_, vPre_;      ///< velocities at the substep's start, before the contacts
-  Buffer<layout::Lines> lines_;
-  Buffer<layout::BodyPush> pushes_;
-  Buffer<layout::Body> bodyData_;
-  Buffer<layout::BodySum> bodySums_;
-  Buffer<float> shares_;
+  BodyCoupling coupling_;  ///< the coupling's kernels, and its buffers once a scene has a dynamic solid
   Program predict_, solve_, update_, respond_, respondFriction_, propagate_, centre_, translate_, pinKernel_, settle_,
-      frictionKernel_, contactForces_, bodySumKernel_, shareKernel_;
+      frictionKernel_;
   Buffer<layout::PinSlot> pinSlots_;
   Buffer<float> pinLambdas_;
   Buffer<std::array<std::uint32_t, 4>> faces_;  ///< the faces, colour by colour (colourFaces)
