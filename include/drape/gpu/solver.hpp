@@ -29,6 +29,7 @@
 #include <drape/gpu/coupling.hpp>
 #include <drape/gpu/program.hpp>
 #include <drape/gpu/shapes.hpp>
+#include <drape/gpu/solid_kernels.hpp>
 #include <drape/gpu/shader_sources.hpp>
 #include <drape/settings.hpp>
 
@@ -158,68 +159,6 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
   using Front::settings_;
   using Front::state_;
 
-  /// One solid as this substep's kernels see it.
-  struct SolidPass {
-    layout::ShapeCode code;
-    PackedShape field;
-    SolidMotion<float> motion;
-    bool curved;  ///< has a face pass (a field that is not linear)
-    float repulsionRadius;
-    Falloff falloff;
-    const Buffer<layout::Vertex>* data;  ///< a mesh's grid nodes or a hull's faces and edges, else null
-    Vec3<float> boxLow, boxHigh;         ///< where phi may be below the distance to the box (+-FLT_MAX: anywhere)
-  };
-  /// The shape's vertex, face and repulsion kernels (the face pass only for a curved one), once per shape type.
-  template <class Shape> void compileFor(bool body) {
-    ShapeKernels& k = kernels_[shapeCode<Shape>()];
-    const std::string define = shapeDefine<Shape>();
-    if (!k.ready) {
-      k.vertices = Program("collide_vertices", shaders::collide_vertices, define);
-      k.repel = Program("repel", shaders::repel, define);
-      if constexpr (!Sdf<Shape, float>::kLinear) k.faces = Program("collide_faces", shaders::collide_faces, define);
-      k.ready = true;
-    }
-    if (body && !k.bodyReady) {  // a coupled body's twins, which keep where each push acts
-      const std::string bodyDefine = define + "#define DRAPE_BODY 1\n";
-      k.verticesBody = Program("collide_vertices", shaders::collide_vertices, bodyDefine);
-      k.repelBody = Program("repel", shaders::repel, bodyDefine);
-      if constexpr (!Sdf<Shape, float>::kLinear)
-        k.facesBody = Program("collide_faces", shaders::collide_faces, bodyDefine);
-      k.bodyReady = true;
-    }
-  }
-
-  /// The shape data a solid's field reads from its own buffer (layout::kShapeData): a mesh's grid nodes, a hull's
-  /// faces and edges. Each grid is uploaded once, however many solids share it; each hull solid builds its own
-  /// query data (compileSolid), so it has its own upload.
-  template <class Shape> static std::shared_ptr<const void> shapeDataKey(const CompiledSolid<Shape, float>& c) {
-    if constexpr (std::is_same_v<Shape, MeshShape>) return c.sdf.grid;
-    else if constexpr (std::is_same_v<Shape, ConvexHull>) return c.sdf.hull;
-    else return nullptr;
-  }
-  template <class Shape> void uploadShapeData(const CompiledSolid<Shape, float>& c) {
-    const std::shared_ptr<const void> key = shapeDataKey(c);
-    if (!key || shapeData(key)) return;
-    std::vector<layout::Vertex> v;
-    if constexpr (std::is_same_v<Shape, MeshShape>) {
-      const auto& nodes = c.sdf.grid->nodes;
-      v.resize(nodes.size());
-      for (std::size_t i = 0; i < v.size(); ++i) v[i] = {nodes[i].x(), nodes[i].y(), nodes[i].z(), nodes[i].w()};
-    } else if constexpr (std::is_same_v<Shape, ConvexHull>) {
-      v = packHull(*c.sdf.hull);
-    }
-    shapeData_.push_back({key, Buffer<layout::Vertex>(v)});
-  }
-  const Buffer<layout::Vertex>* shapeData(const std::shared_ptr<const void>& key) const {
-    for (const auto& d : shapeData_)
-      if (d.key == key) return &d.data;
-    return nullptr;
-  }
-  /// Frees the data no solid uses any more (held only here) after a solid was replaced.
-  void dropUnusedShapeData() {
-    std::erase_if(shapeData_, [](const ShapeData& d) { return d.key.use_count() == 1; });
-  }
-
   void uploadFaces() {
     const FaceColours coloured = gpu::colourFaces(asset_->triangles, vertexCount());
     faceColourOffsets_ = coloured.offsets;
@@ -244,12 +183,12 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
   /// Compiles the solid's kernels before the front end takes it (a kernel that fails to compile changes nothing).
   template <class Shape> void checkSolid(const Solid<Shape>& solid) {
     context_->makeCurrent();
-    compileFor<Shape>(solid.motion == Motion::Dynamic);
+    kernels_.compileFor<Shape>(solid.motion == Motion::Dynamic);
   }
   /// Uploads the shape data of solid k (a mesh's grid, a hull's faces), and frees what no solid uses any more.
   template <class Shape> void solidSet(Index k) {
-    uploadShapeData(std::get<std::vector<CompiledSolid<Shape, float>>>(compiled_)[std::size_t(k)]);
-    dropUnusedShapeData();
+    kernels_.upload(std::get<std::vector<CompiledSolid<Shape, float>>>(compiled_)[std::size_t(k)]);
+    kernels_.dropUnused();
   }
 
   /// Moves the local origin after the cloth (SolverFront::moveOrigin). The centre is summed on the GPU.
@@ -275,62 +214,13 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
   /// kinematic (prepareSolids) and its field packed for the kernels (packShape).
   void prepareSolids(double hd) {
     passes_.clear();
-    const SolidFeatures has = Front::prepareSolids(hd, [&](const auto& compiled, const auto& held) {
-      using Shape = std::decay_t<decltype(held.shape)>;
-      SolidPass p{shapeCode<Shape>(), packShape(compiled.sdf), compiled.motion, !Sdf<Shape, float>::kLinear,
-                  compiled.repulsionRadius, compiled.falloff, shapeData(shapeDataKey(compiled)),
-                  Vec3<float>::Constant(-std::numeric_limits<float>::max()),
-                  Vec3<float>::Constant(std::numeric_limits<float>::max())};
-      if (compiled.bounded) p.boxLow = compiled.boxLow, p.boxHigh = compiled.boxHigh;
-      passes_.push_back(p);
-    });
+    const SolidFeatures has =
+        Front::prepareSolids(hd, [&](const auto& compiled, const auto&) { passes_.push_back(kernels_.pass(compiled)); });
     friction_ = has.friction;
     repulsive_ = has.repulsion;
     reconcile_ = has.reconcile;
     coupled_ = has.coupled;
     if (coupled_) coupling_.reserve(state_.x.size(), bodies_.size());  // the coupling's buffers, once it has a body
-  }
-
-  /// A kernel's uniforms for one solid (its field and motion; for a collision kernel, `collide`, its friction and
-  /// box as well), and its shape data bound.
-  void setSolidUniforms(const Program& k, const SolidPass& p, bool collide = true) const {
-    const SolidMotion<float>& m = p.motion;
-    k.set(layout::kThickness, float(settings_.thickness));
-    setShape(k.id(), p.field);
-    k.set(layout::kSolidCentre, m.centre.x(), m.centre.y(), m.centre.z());
-    k.set(layout::kSolidLinear, m.linearVelocity.x(), m.linearVelocity.y(), m.linearVelocity.z());
-    k.set(layout::kSolidAngular, m.angularVelocity.x(), m.angularVelocity.y(), m.angularVelocity.z());
-    if (p.data) p.data->bind(layout::kShapeData);
-    if (m.body >= 0) glProgramUniform1i(k.id(), layout::kBody, m.body);
-    if (!collide) return;  // the repel kernel declares no friction or box
-    glProgramUniform2f(k.id(), layout::kFriction, m.staticFriction, m.dynamicFriction);
-    k.set(layout::kBoxLow, p.boxLow.x(), p.boxLow.y(), p.boxLow.z());
-    k.set(layout::kBoxHigh, p.boxHigh.x(), p.boxHigh.y(), p.boxHigh.z());
-  }
-
-  /// One solid's vertex pass (projectVertexContacts): `fresh` for the substep's first, which starts every
-  /// record; `pass` the settle pass (-1: the first pass), `slack` what the settle passes leave alone.
-  void vertexPass(const SolidPass& p, bool fresh, int pass, float slack) {
-    const Program& k = p.motion.body >= 0 ? kernels_[p.code].verticesBody : kernels_[p.code].vertices;
-    setSolidUniforms(k, p);
-    k.set(layout::kCount, unsigned(vertexCount()));
-    k.set(layout::kSlack, slack);
-    glProgramUniform1i(k.id(), layout::kPass, pass);
-    k.set(layout::kFresh, unsigned(fresh));
-    k.dispatch(std::size_t(vertexCount()));
-  }
-
-  /// One curved solid's face pass (projectFaceContacts), colour by colour.
-  void facePass(const SolidPass& p) {
-    const Program& k = p.motion.body >= 0 ? kernels_[p.code].facesBody : kernels_[p.code].faces;
-    setSolidUniforms(k, p);
-    glProgramUniform1i(k.id(), layout::kPgdIterations, settings_.pgdIterations);
-    for (std::size_t c = 0; c + 1 < faceColourOffsets_.size(); ++c) {
-      const std::size_t count = faceColourOffsets_[c + 1] - faceColourOffsets_[c];
-      k.set(layout::kFirst, unsigned(faceColourOffsets_[c]));
-      k.set(layout::kCount, unsigned(count));
-      k.dispatch(count);
-    }
   }
 
   /// Vertices with several contact planes go outside all of them (projectOntoContactPlanes); in settle pass
@@ -356,18 +246,21 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
   void projectAll(bool faces) {
     faces = faces && settings_.collisionMethod != CollisionMethod::Vertices;
     if (faces) faces_.bind(layout::kFaces);
+    const float thickness = float(settings_.thickness);
+    const auto n = unsigned(vertexCount());
     for (std::size_t k = 0; k < passes_.size(); ++k) {
-      vertexPass(passes_[k], k == 0, -1, 0.0f);
-      if (faces && passes_[k].curved) facePass(passes_[k]);
+      kernels_.vertexPass(passes_[k], thickness, n, k == 0, -1, 0.0f);
+      if (faces && passes_[k].curved)
+        kernels_.facePass(passes_[k], thickness, settings_.pgdIterations, faceColourOffsets_);
     }
     if (!reconcile_) return;
     settle(-1);
     if (passes_.size() < 2) return;
     glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);  // a clear after shader writes
     glClearNamedBufferData(flags_.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, nullptr);
-    const float slack = float(constants::kSettleSlack) * float(settings_.thickness);
+    const float slack = float(constants::kSettleSlack) * thickness;
     for (int pass = 0; pass < constants::kSettlePasses; ++pass) {
-      for (const SolidPass& p : passes_) vertexPass(p, false, pass, slack);
+      for (const SolidPass& p : passes_) kernels_.vertexPass(p, thickness, n, false, pass, slack);
       settle(pass);
     }
   }
@@ -439,18 +332,8 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
     const auto n = unsigned(vertexCount());
     for (const SolidPass& p : passes_) {
       if (!(p.repulsionRadius > 0)) continue;
-      const bool body = p.motion.body >= 0;
-      const Program& k = body ? kernels_[p.code].repelBody : kernels_[p.code].repel;
-      setSolidUniforms(k, p, false);
-      k.set(layout::kCount, n);
-      glProgramUniform2f(k.id(), layout::kRepulsion, 1.0f / p.repulsionRadius,
-                         p.falloff == Falloff::Smooth ? 1.0f : 0.0f);
-      if (body) {
-        k.set(layout::kStep, h);
-        k.set(layout::kNormalOnly, unsigned(settings_.normalForceOnly));
-      }
-      k.dispatch(n);
-      if (body) gatherRepulsionForces(p.motion.body);
+      kernels_.repel(p, float(settings_.thickness), n, h, settings_.normalForceOnly);
+      if (p.motion.body >= 0) gatherRepulsionForces(p.motion.body);
     }
   }
 
@@ -572,17 +455,7 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
   bool friction_ = false;    ///< some solid has friction this substep
   bool repulsive_ = false;   ///< some solid has a repulsion region this substep
   bool reconcile_ = false;   ///< a vertex may touch several surfaces this substep (a curved solid, or several)
-  struct ShapeKernels {  ///< the collision kernels compiled for one shape type (compileFor)
-    Program vertices, faces, repel;
-    Program verticesBody, facesBody, repelBody;  ///< for a coupled body's solid: its lines and pushes kept too
-    bool ready = false, bodyReady = false;
-  };
-  std::array<ShapeKernels, 8> kernels_;  ///< by layout::ShapeCode
-  struct ShapeData {
-    std::shared_ptr<const void> key;  ///< the grid or hull query data it was made from
-    Buffer<layout::Vertex> data;
-  };
-  std::vector<ShapeData> shapeData_;  ///< every grid and hull the solids use, uploaded once each
+  SolidKernels kernels_;  ///< each shape type's kernels, and the solids' shape data
   Buffer<std::uint32_t> flags_;   ///< per settle pass: whether its vertex passes found a contact
   bool coupled_ = false;          ///< some solid is a dynamic body this substep
   BodyCoupling coupling_;  ///< the coupling's kernels, and its buffers once a scene has a dynamic solid

@@ -1,0 +1,169 @@
+#pragma once
+// The GPU kernels that act on one solid (docs/design.md §9): each shape type's vertex pass, face pass and
+// repulsion, compiled for that shape on its first solid (and again, keeping where each push acts, for a coupled
+// body's), and the shape data a field reads from its own buffer (a mesh's grid nodes, a hull's faces and
+// edges), uploaded once per grid or hull.
+
+#include <drape/gpu/program.hpp>
+#include <drape/gpu/shader_sources.hpp>
+#include <drape/gpu/shapes.hpp>
+#include <drape/sdf/solid.hpp>
+
+#include <algorithm>
+#include <array>
+#include <limits>
+#include <memory>
+#include <string>
+#include <type_traits>
+#include <vector>
+
+namespace drape::gpu {
+
+/// One solid as this substep's kernels see it.
+struct SolidPass {
+  layout::ShapeCode code;
+  PackedShape field;
+  SolidMotion<float> motion;
+  bool curved;  ///< has a face pass (a field that is not linear)
+  float repulsionRadius;
+  Falloff falloff;
+  const Buffer<layout::Vertex>* data;  ///< a mesh's grid nodes or a hull's faces and edges, else null
+  Vec3<float> boxLow, boxHigh;         ///< where phi may be below the distance to the box (+-FLT_MAX: anywhere)
+};
+
+class SolidKernels {
+ public:
+  /// The shape's vertex, face and repulsion kernels (the face pass only for a curved one), once per shape type.
+  template <class Shape> void compileFor(bool body) {
+    ShapeKernels& k = kernels_[shapeCode<Shape>()];
+    const std::string define = shapeDefine<Shape>();
+    if (!k.ready) {
+      k.vertices = Program("collide_vertices", shaders::collide_vertices, define);
+      k.repel = Program("repel", shaders::repel, define);
+      if constexpr (!Sdf<Shape, float>::kLinear) k.faces = Program("collide_faces", shaders::collide_faces, define);
+      k.ready = true;
+    }
+    if (body && !k.bodyReady) {  // a coupled body's twins, which keep where each push acts
+      const std::string bodyDefine = define + "#define DRAPE_BODY 1\n";
+      k.verticesBody = Program("collide_vertices", shaders::collide_vertices, bodyDefine);
+      k.repelBody = Program("repel", shaders::repel, bodyDefine);
+      if constexpr (!Sdf<Shape, float>::kLinear)
+        k.facesBody = Program("collide_faces", shaders::collide_faces, bodyDefine);
+      k.bodyReady = true;
+    }
+  }
+
+  /// The shape data a solid's field reads from its own buffer (layout::kShapeData): a mesh's grid nodes, a hull's
+  /// faces and edges. Each grid is uploaded once, however many solids share it; each hull solid builds its own
+  /// query data (compileSolid), so it has its own upload.
+  template <class Shape> static std::shared_ptr<const void> shapeDataKey(const CompiledSolid<Shape, float>& c) {
+    if constexpr (std::is_same_v<Shape, MeshShape>) return c.sdf.grid;
+    else if constexpr (std::is_same_v<Shape, ConvexHull>) return c.sdf.hull;
+    else return nullptr;
+  }
+  template <class Shape> void upload(const CompiledSolid<Shape, float>& c) {
+    const std::shared_ptr<const void> key = shapeDataKey(c);
+    if (!key || shapeData(key)) return;
+    std::vector<layout::Vertex> v;
+    if constexpr (std::is_same_v<Shape, MeshShape>) {
+      const auto& nodes = c.sdf.grid->nodes;
+      v.resize(nodes.size());
+      for (std::size_t i = 0; i < v.size(); ++i) v[i] = {nodes[i].x(), nodes[i].y(), nodes[i].z(), nodes[i].w()};
+    } else if constexpr (std::is_same_v<Shape, ConvexHull>) {
+      v = packHull(*c.sdf.hull);
+    }
+    shapeData_.push_back({key, Buffer<layout::Vertex>(v)});
+  }
+  const Buffer<layout::Vertex>* shapeData(const std::shared_ptr<const void>& key) const {
+    for (const auto& d : shapeData_)
+      if (d.key == key) return &d.data;
+    return nullptr;
+  }
+  /// Frees the data no solid uses any more (held only here) after a solid was replaced.
+  void dropUnused() {
+    std::erase_if(shapeData_, [](const ShapeData& d) { return d.key.use_count() == 1; });
+  }
+
+  /// Solid `compiled` as this substep's kernels see it (its field packed by packShape).
+  template <class Shape> SolidPass pass(const CompiledSolid<Shape, float>& compiled) const {
+    SolidPass p{shapeCode<Shape>(), packShape(compiled.sdf), compiled.motion, !Sdf<Shape, float>::kLinear,
+                compiled.repulsionRadius, compiled.falloff, shapeData(shapeDataKey(compiled)),
+                Vec3<float>::Constant(-std::numeric_limits<float>::max()),
+                Vec3<float>::Constant(std::numeric_limits<float>::max())};
+    if (compiled.bounded) p.boxLow = compiled.boxLow, p.boxHigh = compiled.boxHigh;
+    return p;
+  }
+
+  /// A kernel's uniforms for one solid (its field and motion; for a collision kernel, `collide`, its friction and
+  /// box as well), and its shape data bound.
+  static void setUniforms(const Program& k, const SolidPass& p, float thickness, bool collide = true) {
+    const SolidMotion<float>& m = p.motion;
+    k.set(layout::kThickness, thickness);
+    setShape(k.id(), p.field);
+    k.set(layout::kSolidCentre, m.centre.x(), m.centre.y(), m.centre.z());
+    k.set(layout::kSolidLinear, m.linearVelocity.x(), m.linearVelocity.y(), m.linearVelocity.z());
+    k.set(layout::kSolidAngular, m.angularVelocity.x(), m.angularVelocity.y(), m.angularVelocity.z());
+    if (p.data) p.data->bind(layout::kShapeData);
+    if (m.body >= 0) glProgramUniform1i(k.id(), layout::kBody, m.body);
+    if (!collide) return;  // the repel kernel declares no friction or box
+    glProgramUniform2f(k.id(), layout::kFriction, m.staticFriction, m.dynamicFriction);
+    k.set(layout::kBoxLow, p.boxLow.x(), p.boxLow.y(), p.boxLow.z());
+    k.set(layout::kBoxHigh, p.boxHigh.x(), p.boxHigh.y(), p.boxHigh.z());
+  }
+
+  /// One solid's vertex pass (projectVertexContacts): `fresh` for the substep's first, which starts every
+  /// record; `pass` the settle pass (-1: the first pass), `slack` what the settle passes leave alone.
+  void vertexPass(const SolidPass& p, float thickness, unsigned vertexCount, bool fresh, int pass, float slack) const {
+    const Program& k = p.motion.body >= 0 ? kernels_[p.code].verticesBody : kernels_[p.code].vertices;
+    setUniforms(k, p, thickness);
+    k.set(layout::kCount, vertexCount);
+    k.set(layout::kSlack, slack);
+    glProgramUniform1i(k.id(), layout::kPass, pass);
+    k.set(layout::kFresh, unsigned(fresh));
+    k.dispatch(vertexCount);
+  }
+
+  /// One curved solid's face pass (projectFaceContacts), colour by colour.
+  void facePass(const SolidPass& p, float thickness, int pgdIterations,
+                const std::vector<std::size_t>& colourOffsets) const {
+    const Program& k = p.motion.body >= 0 ? kernels_[p.code].facesBody : kernels_[p.code].faces;
+    setUniforms(k, p, thickness);
+    glProgramUniform1i(k.id(), layout::kPgdIterations, pgdIterations);
+    for (std::size_t c = 0; c + 1 < colourOffsets.size(); ++c) {
+      const std::size_t count = colourOffsets[c + 1] - colourOffsets[c];
+      k.set(layout::kFirst, unsigned(colourOffsets[c]));
+      k.set(layout::kCount, unsigned(count));
+      k.dispatch(count);
+    }
+  }
+
+  /// One solid's repulsion region over `vertexCount` vertices; a coupled body's kernel also writes each vertex's
+  /// push on the body (h the substep, `normalOnly` as Settings::normalForceOnly).
+  void repel(const SolidPass& p, float thickness, unsigned vertexCount, float h, bool normalOnly) const {
+    const bool body = p.motion.body >= 0;
+    const Program& k = body ? kernels_[p.code].repelBody : kernels_[p.code].repel;
+    setUniforms(k, p, thickness, false);
+    k.set(layout::kCount, vertexCount);
+    glProgramUniform2f(k.id(), layout::kRepulsion, 1.0f / p.repulsionRadius, p.falloff == Falloff::Smooth ? 1.0f : 0.0f);
+    if (body) {
+      k.set(layout::kStep, h);
+      k.set(layout::kNormalOnly, unsigned(normalOnly));
+    }
+    k.dispatch(vertexCount);
+  }
+
+ private:
+  struct ShapeKernels {  ///< the collision kernels compiled for one shape type (compileFor)
+    Program vertices, faces, repel;
+    Program verticesBody, facesBody, repelBody;  ///< for a coupled body's solid: its lines and pushes kept too
+    bool ready = false, bodyReady = false;
+  };
+  std::array<ShapeKernels, 8> kernels_;  ///< by layout::ShapeCode
+  struct ShapeData {
+    std::shared_ptr<const void> key;  ///< the grid or hull query data it was made from
+    Buffer<layout::Vertex> data;
+  };
+  std::vector<ShapeData> shapeData_;  ///< every grid and hull the solids use, uploaded once each
+};
+
+}  // namespace drape::gpu
