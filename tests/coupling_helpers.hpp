@@ -3,6 +3,7 @@
 // cloth, the cloth's momentum, and a rigid world in empty space.
 
 #include <drape/drape.hpp>
+#include <drape/coupling/rigid_world.hpp>
 #include <drape/rigid/world.hpp>
 
 #include <memory>
@@ -29,6 +30,30 @@ template <class Cloth> Eigen::Vector3d clothMomentum(const Cloth& cloth) {
 }
 
 /// A rigid world in empty space: no gravity, no ground.
+/// Drops a ball (radius 5 cm, density 300, at 1 m/s) into `cloth`, a 21 x 21 square of 2 cm pinned at its
+/// corners, coupled with friction 0.3 to a body of `world` (which should have gravity and no ground), and runs
+/// `steps` coupled steps of 0.01 s: the pinned state hashes' hammock.
+template <class Cloth> void dropIntoHammock(Cloth& cloth, RigidWorld& world, int steps) {
+  for (Index corner : {0, 20, 420, 440}) cloth.pin(corner);
+  BodyDesc ball;
+  ball.shape = Sphere{0.05};
+  ball.pose.position = {0.02, -0.01, 0.12};
+  ball.linearVelocity = {0, 0, -1};
+  ball.density = 300;
+  const int b = world.add(ball);
+  CouplingDesc coupling;
+  coupling.staticFriction = coupling.dynamicFriction = 0.3;
+  addCoupledBody(cloth, world, b, coupling);
+  for (int s = 0; s < steps; ++s) stepCoupled(cloth, world, 0.01);
+}
+
+/// Gravity and no ground: the cloth alone holds what falls on it.
+inline RigidSettings noGround() {
+  RigidSettings rigid;
+  rigid.ground = false;
+  return rigid;
+}
+
 inline RigidSettings emptySpace() {
   RigidSettings rigid;
   rigid.gravity.setZero();

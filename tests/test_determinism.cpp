@@ -1,4 +1,6 @@
 // Determinism: the same scene, built and run from scratch twice in one process, ends in bit-identical state.
+#include "state_hash.hpp"
+
 #include <drape/drape.hpp>
 
 #include <catch2/catch.hpp>
@@ -12,30 +14,7 @@
 
 namespace {
 
-/// 64-bit FNV-1a over raw bytes.
-class Fnv1a {
- public:
-  void add(const void* data, std::size_t bytes) {
-    const auto* p = static_cast<const unsigned char*>(data);
-    for (std::size_t i = 0; i < bytes; ++i) {
-      hash_ ^= p[i];
-      hash_ *= 1099511628211ull;
-    }
-  }
-  std::uint64_t value() const { return hash_; }
-
- private:
-  std::uint64_t hash_ = 14695981039346656037ull;
-};
-
-/// Hash of the bits of a state's local origin, positions state().x and velocities state().v.
-template <class S> std::uint64_t hashState(const drape::ClothState<S>& s) {
-  Fnv1a f;
-  f.add(s.origin.data(), 3 * sizeof(double));
-  for (const auto& x : s.x) f.add(x.data(), 3 * sizeof(S));
-  for (const auto& v : s.v) f.add(v.data(), 3 * sizeof(S));
-  return f.value();
-}
+using drape::test::hashState;
 
 constexpr int kFrames = 40;           ///< steps of 1/60 s: 400 substeps at the default 10 substeps per step
 constexpr drape::Index kNudged = 37;  ///< the vertex the perturbed scene moves

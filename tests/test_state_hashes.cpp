@@ -28,16 +28,13 @@
 
 namespace {
 
-using drape::test::Fnv1a;
 using drape::test::hex;
+using drape::test::requireFinite;
 
 /// The recorded hashes, by run name (scene / variant / scalar).
-const std::map<std::string, std::uint64_t>& pinned() {
-  static const std::map<std::string, std::uint64_t> table = {
+const drape::test::PinnedHashes kPinned = {
 #include "state_hashes.inc"
-  };
-  return table;
-}
+};
 
 /// Whether this build may fuse a * b + c (then every float result rounds differently from the pinned runs).
 constexpr bool kMayFuse =
@@ -48,28 +45,10 @@ constexpr bool kMayFuse =
 #endif
 
 void checkPinned(const std::string& name, std::uint64_t hash) {
-  if (const char* print = std::getenv("DRAPE_PRINT_HASHES"); print && *print && *print != '0') {
-    std::cout << "{\"" << name << "\", " << hex(hash) << "ull},\n";  // a line of state_hashes.inc
-    return;
-  }
-  if (kMayFuse) {
-    WARN("built with fused multiply-adds: " << name << " is not compared with its pinned hash");
-    return;
-  }
-  const auto it = pinned().find(name);
-  INFO("run " << name << " ended in state hash " << hex(hash));
-  REQUIRE(it != pinned().end());
-  CHECK(hex(hash) == hex(it->second));
+  drape::test::checkPinned(kPinned, name, hash, kMayFuse ? "built with fused multiply-adds" : "");
 }
 
 template <class S> const char* scalarName() { return std::is_same_v<S, float> ? "float" : "double"; }
-
-template <class Solver> void requireFinite(const Solver& solver) {
-  for (drape::Index i = 0; i < solver.vertexCount(); ++i) {
-    REQUIRE(solver.position(i).allFinite());
-    REQUIRE(solver.velocity(i).allFinite());
-  }
-}
 
 /// A 20 x 30 cloth lands on the 30-degree slope (friction 0.2) and slides, 45 frames of 1/60 s.
 template <class S> std::uint64_t slopeRun(drape::CollisionMethod method, int subSteps) {
@@ -118,17 +97,6 @@ template <class Shape> drape::Solid<Shape> frictional(const Shape& shape, const 
   return s;
 }
 
-/// Adds the bits of every body's pose and velocities.
-void addBodies(Fnv1a& f, const drape::RigidWorld& world) {
-  for (int b = 0; b < world.bodyCount(); ++b) {
-    const drape::RigidBody& body = world.body(b);
-    f.addVector(body.pose().position);
-    f.addVector(body.pose().rotation.coeffs());
-    f.addVector(body.linearVelocity());
-    f.addVector(body.angularVelocity());
-  }
-}
-
 /// Five bodies rain onto a 21 x 21 cloth pinned at its corners, which are let go at 0.3 s; 60 steps of 0.01 s.
 template <class S> std::uint64_t rainRun() {
   drape::scenes::RainConfig c;
@@ -140,37 +108,17 @@ template <class S> std::uint64_t rainRun() {
   c.release = 0.3;
   drape::scenes::RigidRain<S> rain(c);
   for (int k = 0; k < 60; ++k) rain.step();
-  requireFinite(rain.cloth());
-  Fnv1a f;
-  drape::test::addState(f, rain.cloth().state());
-  addBodies(f, rain.world());
-  return f.value();
+  return drape::test::hashClothAndBodies(rain.cloth(), rain.world());
 }
 
-/// A ball (density 300) dropped into a 21 x 21 hammock pinned at its corners, two-way coupled; 40 steps.
+/// A ball dropped into a 21 x 21 hammock pinned at its corners, two-way coupled; 40 steps.
 template <class S> std::uint64_t hammockRun(drape::ContactForce estimator) {
   drape::Settings settings;
   settings.contactForce = estimator;
   drape::Solver<S> cloth(drape::test::squareCloth<S>(21, 0.02, 0.0), settings);
-  for (drape::Index corner : {0, 20, 420, 440}) cloth.pin(corner);
-  drape::RigidSettings rigid;  // gravity, no ground: the cloth holds the ball
-  rigid.ground = false;
-  drape::RigidWorld world(rigid);
-  drape::BodyDesc ball;
-  ball.shape = drape::Sphere{0.05};
-  ball.pose.position = {0.02, -0.01, 0.12};
-  ball.linearVelocity = {0, 0, -1};
-  ball.density = 300;
-  const int b = world.add(ball);
-  drape::CouplingDesc coupling;
-  coupling.staticFriction = coupling.dynamicFriction = 0.3;
-  drape::addCoupledBody(cloth, world, b, coupling);
-  for (int s = 0; s < 40; ++s) drape::stepCoupled(cloth, world, 0.01);
-  requireFinite(cloth);
-  Fnv1a f;
-  drape::test::addState(f, cloth.state());
-  addBodies(f, world);
-  return f.value();
+  drape::RigidWorld world(drape::test::noGround());
+  drape::test::dropIntoHammock(cloth, world, 40);
+  return drape::test::hashClothAndBodies(cloth, world);
 }
 
 const char* methodName(drape::CollisionMethod m) { return drape::toString(m); }

@@ -21,37 +21,17 @@
 
 namespace {
 
-using drape::test::Fnv1a;
 using drape::test::hex;
+using drape::test::requireFinite;
 
-const std::map<std::string, std::uint64_t>& pinned() {
-  static const std::map<std::string, std::uint64_t> table = {
+const drape::test::PinnedHashes kPinned = {
 #include "state_hashes_gpu.inc"
-  };
-  return table;
-}
+};
 
 void checkPinned(const std::string& name, std::uint64_t hash) {
-  if (const char* print = std::getenv("DRAPE_PRINT_HASHES"); print && *print && *print != '0') {
-    std::cout << "{\"" << name << "\", " << hex(hash) << "ull},\n";  // a line of state_hashes_gpu.inc
-    return;
-  }
   const std::string& renderer = drape::test::gpuContext().renderer();
-  if (renderer.find("llvmpipe") == std::string::npos) {
-    WARN("renderer " << renderer << ": " << name << " is not compared with its llvmpipe hash");
-    return;
-  }
-  const auto it = pinned().find(name);
-  INFO("run " << name << " ended in state hash " << hex(hash));
-  REQUIRE(it != pinned().end());
-  CHECK(hex(hash) == hex(it->second));
-}
-
-template <class Solver> void requireFinite(const Solver& solver) {
-  for (drape::Index i = 0; i < solver.vertexCount(); ++i) {
-    REQUIRE(solver.position(i).allFinite());
-    REQUIRE(solver.velocity(i).allFinite());
-  }
+  const bool llvmpipe = renderer.find("llvmpipe") != std::string::npos;
+  drape::test::checkPinned(kPinned, name, hash, llvmpipe ? "" : "renderer " + renderer + ", not llvmpipe");
 }
 
 }  // namespace
@@ -74,27 +54,7 @@ TEST_CASE("pinned state hashes on the GPU: the slope at 2 and 10 substeps", "[gp
 
 TEST_CASE("pinned state hashes on the GPU: a ball dropped into a hammock (two-way coupling)", "[gpu][hashes]") {
   drape::gpu::Solver cloth(drape::test::gpuContext(), drape::test::squareCloth<float>(21, 0.02, 0.0));
-  for (drape::Index corner : {0, 20, 420, 440}) cloth.pin(corner);
-  drape::RigidSettings rigid;  // gravity, no ground: the cloth holds the ball
-  rigid.ground = false;
-  drape::RigidWorld world(rigid);
-  drape::BodyDesc ball;
-  ball.shape = drape::Sphere{0.05};
-  ball.pose.position = {0.02, -0.01, 0.12};
-  ball.linearVelocity = {0, 0, -1};
-  ball.density = 300;
-  const int b = world.add(ball);
-  drape::CouplingDesc coupling;
-  coupling.staticFriction = coupling.dynamicFriction = 0.3;
-  drape::addCoupledBody(cloth, world, b, coupling);
-  for (int s = 0; s < 40; ++s) drape::stepCoupled(cloth, world, 0.01);
-  requireFinite(cloth);
-  Fnv1a f;
-  drape::test::addState(f, cloth.state());
-  const drape::RigidBody& body = world.body(b);
-  f.addVector(body.pose().position);
-  f.addVector(body.pose().rotation.coeffs());
-  f.addVector(body.linearVelocity());
-  f.addVector(body.angularVelocity());
-  checkPinned("gpu/hammock", f.value());
+  drape::RigidWorld world(drape::test::noGround());
+  drape::test::dropIntoHammock(cloth, world, 40);
+  checkPinned("gpu/hammock", drape::test::hashClothAndBodies(cloth, world));
 }
