@@ -198,8 +198,8 @@ void BM_StretchSolveCpu(benchmark::State& state) {
   const auto s = drape::ClothState<float>::fromAsset(*asset, 0.1);
   std::vector<drape::Vec4<float>> xw(s.x.size());
   for (std::size_t i = 0; i < xw.size(); ++i) xw[i] = {1.01f * s.x[i].x(), 1.01f * s.x[i].y(), s.x[i].z(), 0.0f};
-  drape::LaneMasses<float> lanes;
-  lanes.gather(asset->stretch, s.invMass.data());
+  drape::DistanceBlocks<float> lanes(asset->stretch);
+  lanes.gatherMasses(s.invMass.data());
   for (auto _ : state) {
     drape::solveDistanceSet<false, float>(asset->stretch, lanes, 0.0f, nullptr, xw.data(), s.invMass.data());
     benchmark::ClobberMemory();

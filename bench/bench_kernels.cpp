@@ -44,8 +44,8 @@ template <class S> void distanceSet(benchmark::State& state) {
     x[i] = drape::Vec4<S>(p.x(), p.y(), p.z(), S(0));
   }
   const std::vector<S> w(x.size(), S(10));
-  drape::LaneMasses<S> lanes;
-  lanes.gather(set, w.data());
+  drape::DistanceBlocks<S> lanes(set);
+  lanes.gatherMasses(w.data());
   for (auto _ : state) {
     drape::solveDistanceSet<false>(set, lanes, S(0), static_cast<S*>(nullptr), x.data(), w.data(), level);
     for (auto& p : x) p.template head<3>() *= S(1.0001);  // keep them stretched

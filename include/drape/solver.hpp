@@ -48,10 +48,13 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     xPrev_.resize(n);
     xPredicted_.resize(n);
     packed_.resize(n);
+    blocks_[0] = DistanceBlocks<S>(asset_->stretch);
+    blocks_[1] = DistanceBlocks<S>(asset_->shear);
+    blocks_[2] = DistanceBlocks<S>(asset_->bending);
     gatherLaneMasses();
-    lambdaStretch_.resize(asset_->stretch.lambdaCount());
-    lambdaShear_.resize(asset_->shear.lambdaCount());
-    lambdaBending_.resize(asset_->bending.lambdaCount());
+    lambdaStretch_.resize(blocks_[0].lambdaCount(asset_->stretch));
+    lambdaShear_.resize(blocks_[1].lambdaCount(asset_->shear));
+    lambdaBending_.resize(blocks_[2].lambdaCount(asset_->bending));
     propagation_.resize(n);
     // Grid cells of two mean edge lengths: a cell holds a few vertices of a flat cloth.
     double edgeSum = 0;
@@ -200,9 +203,9 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
       }
     }
     for (int it = 0; it < iterations; ++it) {
-      solveSet(a.stretch, laneMasses_[0], stretchAlpha, lambdaStretch_.data(), iterations);
-      solveSet(a.shear, laneMasses_[1], shearAlpha, lambdaShear_.data(), iterations);
-      solveSet(a.bending, laneMasses_[2], bendingAlpha, lambdaBending_.data(), iterations);
+      solveSet(a.stretch, blocks_[0], stretchAlpha, lambdaStretch_.data(), iterations);
+      solveSet(a.shear, blocks_[1], shearAlpha, lambdaShear_.data(), iterations);
+      solveSet(a.bending, blocks_[2], bendingAlpha, lambdaBending_.data(), iterations);
       if (!pinLocal_.empty()) {
         DRAPE_OMP(single)
         {
@@ -247,9 +250,7 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
   /// read them: double runs the scalar kernel on the masses themselves.
   void gatherLaneMasses() {
     if constexpr (!std::is_same_v<S, float>) return;
-    laneMasses_[0].gather(asset_->stretch, state_.invMass.data());
-    laneMasses_[1].gather(asset_->shear, state_.invMass.data());
-    laneMasses_[2].gather(asset_->bending, state_.invMass.data());
+    for (DistanceBlocks<S>& b : blocks_) b.gatherMasses(state_.invMass.data());
   }
 
   /// The packed positions back into the state (a work-shared loop).
@@ -309,9 +310,9 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     coupling::addPinches(bodySums_, bodyForce_, bodyTorque_);
   }
 
-  void solveSet(const DistanceSet<S>& set, const LaneMasses<S>& lanes, S alpha, S* lambda, int iterations) {
+  void solveSet(const DistanceSet<S>& set, const DistanceBlocks<S>& blocks, S alpha, S* lambda, int iterations) {
     withFlags([&](auto useLambda) {
-      solveDistanceSet<useLambda()>(set, lanes, alpha, lambda, packed_.data(), state_.invMass.data());
+      solveDistanceSet<useLambda()>(set, blocks, alpha, lambda, packed_.data(), state_.invMass.data());
     }, iterations > 1 && alpha > S(0));
   }
 
@@ -349,7 +350,9 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
   std::vector<PinTarget<S>> pinLocal_;
   std::vector<Vec3<S>> xPrev_, xPredicted_;
   std::vector<Vec4<S>> packed_;   ///< (position, 0) of each vertex: what the constraint solve works on
-  LaneMasses<S> laneMasses_[3];  ///< the stretch, shear and bending blocks' inverse masses (gatherLaneMasses)
+  /// The stretch, shear and bending sets as the float SIMD kernels read them, with their lanes' inverse masses
+  /// (gatherLaneMasses); the asset holds the topology only.
+  DistanceBlocks<S> blocks_[3];
   std::vector<S> lambdaStretch_, lambdaShear_, lambdaBending_, lambdaPins_;
   ContactPasses<S> passes_;  ///< the contact records and the broad phase
   PropagationBuffer<S> propagation_;

@@ -191,8 +191,8 @@ TEST_CASE("solve: the GPU kernel, one dispatch per colour, against solveDistance
   std::vector<Vec4<float>> cpu = xw;
   const drape::DistanceSet<float>* sets[3] = {&asset->stretch, &asset->shear, &asset->bending};
   std::vector<std::vector<float>> lambdas(3);
-  drape::LaneMasses<float> noLanes;
-  for (int s = 0; s < 3; ++s) lambdas[std::size_t(s)].assign(std::size_t(sets[s]->lambdaCount()), 0.0f);
+  const drape::DistanceBlocks<float> noLanes;  // the scalar kernel reads no blocks
+  for (int s = 0; s < 3; ++s) lambdas[std::size_t(s)].assign(std::size_t(sets[s]->size()), 0.0f);
   for (int p = 0; p < passes; ++p)
     for (int s = 0; s < 3; ++s) {
       if (withLambda)

@@ -24,34 +24,15 @@ struct Adjacency {
   const Index* end(Index i) const { return items.data() + offsets[i + 1]; }
 };
 
-/// Four constraints of one colour side by side, the unit the solver's SIMD kernel works on (one SSE register
-/// of floats). Each end is kept as 4 x its vertex index, the offset of the vertex among the packed positions'
-/// scalars (four per vertex), which an x86 load addresses in the same instruction as the base.
-template <Scalar S> struct DistanceBlock {
-  static constexpr int kLanes = 4;
-  Index a[kLanes], b[kLanes];  ///< 4 x the vertex indices of each pair
-  S rest[kLanes];              ///< rest lengths (m)
-
-  Index vertexA(int lane) const { return a[lane] / 4; }
-  Index vertexB(int lane) const { return b[lane] / 4; }
-};
-
 /// A set of distance constraints between vertex pairs, reordered so that each colour holds constraints that
 /// share no vertex (Gauss-Seidel within a colour is then order-independent and parallel-safe).
 template <Scalar S> struct DistanceSet {
   std::vector<std::array<Index, 2>> pairs;  ///< #C vertex pairs
   std::vector<S> restLength;                ///< #C rest lengths (m)
   std::vector<Index> colourOffsets{0};      ///< colour c holds constraints [colourOffsets[c], colourOffsets[c+1])
-  /// The same constraints in blocks, colour c in blocks [blockOffsets[c], blockOffsets[c+1]). The lanes past a
-  /// colour's last constraint repeat the first constraint of their block: a repeated lane reads what its
-  /// original reads and writes what it writes, so a block is solved whole, without a mask.
-  std::vector<DistanceBlock<S>> blocks;
-  std::vector<Index> blockOffsets{0};
 
   Index size() const { return Index(pairs.size()); }
   Index colourCount() const { return Index(colourOffsets.size()) - 1; }
-  /// Multipliers a solver keeps for this set: one per constraint, or per lane where that is more.
-  Index lambdaCount() const { return std::max(size(), Index(blocks.size()) * DistanceBlock<S>::kLanes); }
 };
 
 /// A rectangular sheet: a regular lattice of nx by ny vertices in the local XY plane, centred on the pose's
@@ -137,22 +118,6 @@ DistanceSet<S> colourDistanceSet(Index vertexCount, const std::vector<std::array
     const Index slot = fill[colour[k]]++;
     set.pairs[slot] = pairs[k];
     set.restLength[slot] = (rest[pairs[k][0]] - rest[pairs[k][1]]).norm();
-  }
-  constexpr Index kLanes = DistanceBlock<S>::kLanes;
-  set.blockOffsets.assign(colours + 1, 0);
-  for (Index c = 0; c < colours; ++c) {
-    const Index begin = set.colourOffsets[c], end = set.colourOffsets[c + 1];
-    set.blockOffsets[c + 1] = set.blockOffsets[c] + (end - begin + kLanes - 1) / kLanes;
-    for (Index first = begin; first < end; first += kLanes) {
-      DistanceBlock<S> block;
-      for (Index lane = 0; lane < kLanes; ++lane) {
-        const Index k = first + lane < end ? first + lane : first;
-        block.a[lane] = 4 * set.pairs[k][0];
-        block.b[lane] = 4 * set.pairs[k][1];
-        block.rest[lane] = set.restLength[k];
-      }
-      set.blocks.push_back(block);
-    }
   }
   return set;
 }

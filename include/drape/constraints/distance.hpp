@@ -30,6 +30,67 @@
 #endif
 
 namespace drape {
+
+/// Four constraints of one colour side by side, the unit the solver's SIMD kernel works on (one SSE register
+/// of floats). Each end is kept as 4 x its vertex index, the offset of the vertex among the packed positions'
+/// scalars (four per vertex), which an x86 load addresses in the same instruction as the base.
+template <Scalar S> struct DistanceBlock {
+  static constexpr int kLanes = 4;
+  Index a[kLanes], b[kLanes];  ///< 4 x the vertex indices of each pair
+  S rest[kLanes];              ///< rest lengths (m)
+
+  Index vertexA(int lane) const { return a[lane] / 4; }
+  Index vertexB(int lane) const { return b[lane] / 4; }
+};
+
+/// A set's constraints as the float SIMD kernels read them, built by the solver from the asset's DistanceSet:
+/// colour c in blocks [blockOffsets[c], blockOffsets[c+1]). The lanes past a colour's last constraint repeat
+/// the first constraint of their block: a repeated lane reads what its original reads and writes what it
+/// writes, so a block is solved whole, without a mask. massA and massB copy the inverse masses at both ends of
+/// every lane (lane k of block j at 4 j + k), so the kernel reads them with two loads; whoever changes a mass
+/// gathers them again.
+template <Scalar S> struct DistanceBlocks {
+  std::vector<DistanceBlock<S>> blocks;
+  std::vector<Index> blockOffsets{0};
+  std::vector<S> massA, massB;
+
+  explicit DistanceBlocks(const DistanceSet<S>& set) {
+    const Index colours = set.colourCount();
+    constexpr Index kLanes = DistanceBlock<S>::kLanes;
+    blockOffsets.assign(colours + 1, 0);
+    for (Index c = 0; c < colours; ++c) {
+      const Index begin = set.colourOffsets[c], end = set.colourOffsets[c + 1];
+      blockOffsets[c + 1] = blockOffsets[c] + (end - begin + kLanes - 1) / kLanes;
+      for (Index first = begin; first < end; first += kLanes) {
+        DistanceBlock<S> block;
+        for (Index lane = 0; lane < kLanes; ++lane) {
+          const Index k = first + lane < end ? first + lane : first;
+          block.a[lane] = 4 * set.pairs[k][0];
+          block.b[lane] = 4 * set.pairs[k][1];
+          block.rest[lane] = set.restLength[k];
+        }
+        blocks.push_back(block);
+      }
+    }
+  }
+  DistanceBlocks() = default;
+
+  void gatherMasses(const S* invMass) {
+    constexpr int kLanes = DistanceBlock<S>::kLanes;
+    massA.resize(blocks.size() * kLanes);
+    massB.resize(blocks.size() * kLanes);
+    for (std::size_t j = 0; j < blocks.size(); ++j)
+      for (int k = 0; k < kLanes; ++k) {
+        massA[j * kLanes + k] = invMass[blocks[j].vertexA(k)];
+        massB[j * kLanes + k] = invMass[blocks[j].vertexB(k)];
+      }
+  }
+  /// Multipliers a solver keeps for `set`: one per constraint, or per lane where that is more.
+  Index lambdaCount(const DistanceSet<S>& set) const {
+    return std::max(set.size(), Index(blocks.size()) * DistanceBlock<S>::kLanes);
+  }
+};
+
 namespace detail {
 
 /// One constraint on packed vertices (written per component: Eigen's vector expressions cost more
@@ -212,12 +273,11 @@ DRAPE_TARGET_AVX2 void solveColourAvx2(const DistanceBlock<float>* blocks, Index
 }
 
 template <bool kLambda>
-DRAPE_TARGET_AVX2 void solveSetAvx2(const DistanceSet<float>& set, const float* massA,
-                                                  const float* massB, float alphaTilde, float* lambda,
-                                                  Vec4<float>* xw) {
-  for (Index c = 0; c < set.colourCount(); ++c)
-    solveColourAvx2<kLambda>(set.blocks.data(), set.blockOffsets[c], set.blockOffsets[c + 1], massA, massB,
-                             alphaTilde, lambda, xw);
+DRAPE_TARGET_AVX2 void solveSetAvx2(const DistanceBlocks<float>& set, float alphaTilde, float* lambda,
+                                   Vec4<float>* xw) {
+  for (Index c = 0; c + 1 < Index(set.blockOffsets.size()); ++c)
+    solveColourAvx2<kLambda>(set.blocks.data(), set.blockOffsets[c], set.blockOffsets[c + 1], set.massA.data(),
+                             set.massB.data(), alphaTilde, lambda, xw);
 }
 #undef DRAPE_TARGET_AVX2
 #endif
@@ -244,26 +304,9 @@ inline SimdLevel bestSimdLevel() {
 #endif
 }
 
-/// The inverse masses at the two ends of every lane of a set's blocks (lane k of block j at 4 j + k), copied
-/// from the vertices: the SIMD kernel reads them with two loads. Whoever changes a mass gathers them again.
-template <Scalar S> struct LaneMasses {
-  std::vector<S> a, b;
-
-  void gather(const DistanceSet<S>& set, const S* invMass) {
-    constexpr int kLanes = DistanceBlock<S>::kLanes;
-    a.resize(set.blocks.size() * kLanes);
-    b.resize(set.blocks.size() * kLanes);
-    for (std::size_t j = 0; j < set.blocks.size(); ++j)
-      for (int k = 0; k < kLanes; ++k) {
-        a[j * kLanes + k] = invMass[set.blocks[j].vertexA(k)];
-        b[j * kLanes + k] = invMass[set.blocks[j].vertexB(k)];
-      }
-  }
-};
-
-/// One pass over `set` on packed positions xw (x, y, z, 0) with the vertices' inverse masses, also gathered
-/// per lane in `lanes`. alphaTilde = compliance / h^2; lambda holds the accumulated multipliers of this substep
-/// (zeroed at its start), set.lambdaCount() of them; it may be null when kLambda is false. kLambda false drops the multipliers: exact when they cannot matter, i.e. for
+/// One pass over `set` on packed positions xw (x, y, z, 0) with the vertices' inverse masses; the float SIMD
+/// kernels read the same constraints from `blocks` (built from `set`, its masses gathered). alphaTilde = compliance / h^2; lambda holds the accumulated multipliers of this substep
+/// (zeroed at its start), blocks.lambdaCount(set) of them; it may be null when kLambda is false. kLambda false drops the multipliers: exact when they cannot matter, i.e. for
 /// rigid constraints (alphaTilde 0) or a single pass per substep (lambda is 0 on entry and never read again),
 /// and it saves a load, a store and a multiply per constraint.
 /// Constraints of one colour share no vertex, so each colour is a work-shared loop when called inside a
@@ -273,14 +316,14 @@ template <Scalar S> struct LaneMasses {
 /// the next narrower one). The levels give the same bits, but the multipliers are kept per lane by the SIMD
 /// kernels and per constraint by the scalar one, so one lambda array serves one level.
 template <bool kLambda, Scalar S>
-void solveDistanceSet(const DistanceSet<S>& set, const LaneMasses<S>& lanes, S alphaTilde, S* lambda, Vec4<S>* xw,
-                      const S* invMass, SimdLevel level = bestSimdLevel()) {
+void solveDistanceSet(const DistanceSet<S>& set, const DistanceBlocks<S>& blocks, S alphaTilde, S* lambda,
+                      Vec4<S>* xw, const S* invMass, SimdLevel level = bestSimdLevel()) {
   const Index colours = set.colourCount();
   if (level > bestSimdLevel()) level = bestSimdLevel();
 #if DRAPE_AVX2
   if constexpr (std::is_same_v<S, float>) {
     if (level == SimdLevel::Avx2) {
-      detail::solveSetAvx2<kLambda>(set, lanes.a.data(), lanes.b.data(), alphaTilde, lambda, xw);
+      detail::solveSetAvx2<kLambda>(blocks, alphaTilde, lambda, xw);
       return;
     }
   }
@@ -289,14 +332,16 @@ void solveDistanceSet(const DistanceSet<S>& set, const LaneMasses<S>& lanes, S a
   if constexpr (std::is_same_v<S, float>) {
     if (level == SimdLevel::Sse2) {
       constexpr Index kLanes = DistanceBlock<S>::kLanes;
-      const DistanceBlock<float>* blocks = set.blocks.data();
+      const DistanceBlock<float>* block = blocks.blocks.data();
+      const float* massA = blocks.massA.data();
+      const float* massB = blocks.massB.data();
       const __m128 alpha = _mm_set1_ps(alphaTilde);
       for (Index c = 0; c < colours; ++c) {
-        const Index begin = set.blockOffsets[c], end = set.blockOffsets[c + 1];
+        const Index begin = blocks.blockOffsets[c], end = blocks.blockOffsets[c + 1];
         DRAPE_OMP(for schedule(static))
         for (Index k = begin; k < end; ++k)
-          detail::solveDistanceBlock<kLambda>(blocks[k], lanes.a.data() + k * kLanes, lanes.b.data() + k * kLanes,
-                                              alpha, kLambda ? lambda + k * kLanes : nullptr, xw);
+          detail::solveDistanceBlock<kLambda>(block[k], massA + k * kLanes, massB + k * kLanes, alpha,
+                                              kLambda ? lambda + k * kLanes : nullptr, xw);
       }
       return;
     }
