@@ -5,7 +5,7 @@
 // Arguments: bodies, substeps per step, collision method (0 faces: vertex and face contacts, the default;
 // 1 vertex: vertex contacts only, the thesis's method). The first series is the library's defaults (10
 // substeps, faces); the others measure what fewer substeps and vertex-only contacts save (the speed side of
-// the trade; the accuracy side is the rain sample's, README "Cost per body").
+// the trade; the accuracy side is the rain sample's, docs/benchmarks.md, "Many bodies: cost per body").
 // At the end, for each series, a least-squares line ms = a + b N through the medians (b: the cost per body per
 // step; a: what is left at N = 0, to compare with the cloth alone, N = 0), and each count's cost per body over
 // the cloth alone.

@@ -14,7 +14,7 @@
 // vertex's contact planes and the settle passes; the velocity split with Coulomb friction, per surface, then
 // reconciled; and propagation ring by ring; and the local origin following the cloth, as on the CPU; fixed
 // vertices (inverse mass 0) and pins with targets. Convex hulls, the in-solve method and the two-way coupling with
-// dynamic bodies run too (see the kernels' list in README.md, "On the GPU"). The GPU always culls (boxes, bounding
+// dynamic bodies run too (see the kernels' list in docs/design.md §9). The GPU always culls (boxes, bounding
 // spheres), whatever Settings::culling and broadPhase say: the contacts are the same.
 //
 // Against planes the GPU gives the CPU's bits on llvmpipe. Against a curved solid the face pass visits the
