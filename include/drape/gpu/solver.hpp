@@ -15,7 +15,7 @@
 // reconciled; and propagation ring by ring; and the local origin following the cloth, as on the CPU; fixed
 // vertices (inverse mass 0) and pins with targets. Convex hulls, the in-solve method and the two-way coupling with
 // dynamic bodies run too (see the kernels' list in docs/design.md §9). The GPU always culls (boxes, bounding
-// spheres), whatever Settings::culling and broadPhase say: the contacts are the same.
+// spheres), which drops no contact; settings that turn culling or the broad phase off are rejected.
 //
 // Against planes the GPU gives the CPU's bits on llvmpipe. Against a curved solid the face pass visits the
 // faces colour by colour where the CPU goes in index order (another order of the same Gauss-Seidel pass); the
