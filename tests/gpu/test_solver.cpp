@@ -271,6 +271,19 @@ TEST_CASE("the GPU solver rejects bad settings and solids before changing anythi
   CHECK_THROWS_WITH(gpu.solid<drape::Sphere>(0), Catch::Contains("out of range"));  // nothing was added
   CHECK_THROWS_WITH(gpu.setSettings(badSettings), Catch::Contains("iterationCount"));
   CHECK(gpu.settings().iterationCount == parts.settings.iterationCount);
+  // Valid settings the GPU does not run are refused, by name, rather than ignored.
+  drape::Settings noCulling = parts.settings, noBroadPhase = parts.settings, threads = parts.settings;
+  noCulling.culling = false;
+  noBroadPhase.broadPhase = false;
+  threads.threadCount = 2;
+  CHECK_THROWS_WITH(gpu.setSettings(noCulling), Catch::Contains("culling"));
+  CHECK_THROWS_WITH(gpu.setSettings(noBroadPhase), Catch::Contains("broadPhase"));
+  CHECK_THROWS_WITH(gpu.setSettings(threads), Catch::Contains("threadCount"));
+  CHECK_THROWS_WITH(drape::gpu::Solver(drape::test::gpuContext(), parts.asset, noCulling),
+                    Catch::Contains("culling"));
+  CHECK(gpu.settings().culling);
+  CHECK(gpu.settings().broadPhase);
+  CHECK(gpu.settings().threadCount == 1);
 }
 
 TEST_CASE("repulsion: a plane rising toward a cloth slows it alike on the GPU and the CPU", "[gpu]") {
