@@ -56,7 +56,7 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     lambdaShear_.resize(blocks_[1].lambdaCount(asset_->shear));
     lambdaBending_.resize(blocks_[2].lambdaCount(asset_->bending));
     propagation_.resize(n);
-    // Grid cells of two mean edge lengths: a cell holds a few vertices of a flat cloth.
+    // Bins of two mean edge lengths: a cell holds a few vertices of a flat cloth.
     double edgeSum = 0;
     for (const auto& e : asset_->edges)
       edgeSum += double((asset_->restPositions[e[1]] - asset_->restPositions[e[0]]).norm());
