@@ -6,7 +6,7 @@
 // The solve works on packed positions, (x, y, z, 0) in one Vec4, so a vertex is one aligned load and store.
 // Float solves the constraints of a colour four at a time in SSE registers (DistanceBlock), or eight at a time
 // in AVX2 registers where the processor has them, lane by lane with exactly the scalar kernel's operations in
-// the same order, so all three give the same bits; the inverse masses of a block's ends come from LaneMasses,
+// the same order, so all three give the same bits; the inverse masses of a block's ends come from its lane copies,
 // two loads. Double runs the scalar kernel over the same layout. (A build for a processor with FMA, such as
 // -march=native, lets the compiler fuse a * b + c in the scalar and SSE kernels; they then round a little
 // differently from the AVX2 kernel, which never fuses. Each kernel is still deterministic.)
