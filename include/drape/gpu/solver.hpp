@@ -87,9 +87,6 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
   friend Front;
 
  public:
-  using Front::solidCount;
-  using Front::vertexCount;
-
   /// Uploads the asset's constraints and its rest state (masses from areaDensity, kg/m^2). `context` must be
   /// current and outlive the solver.
   Solver(Context& context, std::shared_ptr<const ClothAsset<float>> asset, const Settings& settings = {},
@@ -149,16 +146,7 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
     glFinish();
   }
  private:
-  using Front::asset_;
-  using Front::bodies_;
-  using Front::bodyCentre_;
-  using Front::bodyForce_;
-  using Front::bodyTorque_;
-  using Front::compiled_;
-  using Front::pins_;
-  using Front::settings_;
-  using Front::state_;
-
+  // The front end is not a dependent base here: its members are found without using-declarations.
   void uploadFaces() {
     const FaceColours coloured = gpu::colourFaces(asset_->triangles, vertexCount());
     faceColourOffsets_ = coloured.offsets;
