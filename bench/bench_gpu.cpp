@@ -155,13 +155,13 @@ void BM_VertexKernelCpu(benchmark::State& state) {
   std::vector<drape::Vec4<float>> xw(static_cast<std::size_t>(n));
   const bool predict = state.range(0) == 0;
   const drape::Vec3<float> gh(0, 0, -9.81f / 600);
-  drape::predictPositions<true>(n, s.x.data(), s.v.data(), s.invMass.data(), gh, 1.0f / 600, x0.data(), xp.data(), xw.data());
+  drape::predictPositions<true>(0, n, s.x.data(), s.v.data(), s.invMass.data(), gh, 1.0f / 600, x0.data(), xp.data(), xw.data());
   for (auto _ : state) {
     if (predict)
-      drape::predictPositions<true>(n, s.x.data(), s.v.data(), s.invMass.data(), gh, 1.0f / 600, x0.data(), xp.data(),
+      drape::predictPositions<true>(0, n, s.x.data(), s.v.data(), s.invMass.data(), gh, 1.0f / 600, x0.data(), xp.data(),
                                     xw.data());
     else
-      drape::updateVelocities<false, false>(n, xw.data(), xp.data(), s.x.data(), s.v.data(), 600.0f);
+      drape::updateVelocities<false, false>(0, n, xw.data(), xp.data(), s.x.data(), s.v.data(), 600.0f);
     benchmark::ClobberMemory();
   }
   state.SetLabel(predict ? "predict" : "update velocity");
@@ -286,7 +286,6 @@ void BM_CollideCpu(benchmark::State& state) {
   contacts.resize(asset->vertexCount());
   drape::CollisionStats stats;
   std::vector<drape::Vec3<float>> x;
-  float bound = 0;
   for (auto _ : state) {
     x = s.x;
     contacts.begin();
@@ -294,8 +293,8 @@ void BM_CollideCpu(benchmark::State& state) {
       drape::projectFaceContacts<true>(ball, 0.005f, 12, asset->triangles, drape::AllItems{}, asset->faceCount(),
                                        x.data(), s.invMass.data(), contacts, stats, x.data());
     else
-      drape::projectVertexContacts(ball, 0.005f, x.data(), s.invMass.data(), drape::AllItems{}, asset->vertexCount(),
-                                   contacts, stats, x.data(), bound);
+      drape::projectVertexContacts(0, asset->vertexCount(), ball, 0.005f, x.data(), s.invMass.data(),
+                                   drape::AllItems{}, contacts, x.data());
     benchmark::ClobberMemory();
   }
   state.SetLabel(facePass ? "face pass" : "vertex pass");

@@ -64,13 +64,13 @@ template <class S> void integrate(benchmark::State& state) {
   const std::vector<S> w(n, S(10));
   const drape::Vec3<S> gh(0, 0, S(-9.81 / 300));
   const S h = S(1.0 / 300);
-  drape::predictPositions<false>(n, x.data(), v.data(), w.data(), gh, h, x0.data(), xp.data(), xw.data());
+  drape::predictPositions<false>(0, n, x.data(), v.data(), w.data(), gh, h, x0.data(), xp.data(), xw.data());
   const bool predict = state.range(0) == 0;
   for (auto _ : state) {
     if (predict)
-      drape::predictPositions<false>(n, x.data(), v.data(), w.data(), gh, h, x0.data(), xp.data(), xw.data());
+      drape::predictPositions<false>(0, n, x.data(), v.data(), w.data(), gh, h, x0.data(), xp.data(), xw.data());
     else
-      drape::updateVelocities<false, false>(n, xw.data(), xp.data(), x.data(), v.data(), S(1) / h);
+      drape::updateVelocities<false, false>(0, n, xw.data(), xp.data(), x.data(), v.data(), S(1) / h);
     benchmark::ClobberMemory();
   }
   perItem(state, double(n));
@@ -130,10 +130,12 @@ template <class S, bool kFriction> void respondAndPropagate(benchmark::State& st
     }
     for (auto& vi : v) vi = drape::Vec3<S>(0.1, 0, -0.2);
     state.ResumeTiming();
-    if (propagate)
-      drape::propagateCorrections(contacts, propagation, asset->vertexNeighbours, v.data(), w.data(), S(0.5), 1);
-    else
-      drape::respondContacts<kFriction>(contacts, x.data(), x0.data(), v.data(), S(1.0 / 300), S(1));
+    if (propagate) {
+      propagation.beginPass();
+      drape::propagateRing(0, n, 1, contacts, propagation, asset->vertexNeighbours, v.data(), w.data(), S(0.5));
+    } else {
+      drape::respondContacts<kFriction>(0, n, contacts, x.data(), x0.data(), v.data(), S(1.0 / 300), S(1));
+    }
     benchmark::ClobberMemory();
   }
   perItem(state, propagate ? double(n) : double(live));

@@ -34,8 +34,7 @@ template <class S> struct Wedge {
   /// Where the settle puts the vertex.
   drape::Vec3<S> settle(const drape::ContactBuffer<S>& buffer) const {
     drape::Vec3<S> x = x0, reference = x0, binned = x0;
-    S moveBound = 0;
-    drape::projectOntoContactPlanes(buffer, &x, &reference, &binned, moveBound);
+    drape::projectOntoContactPlanes(0, 1, buffer, &x, &reference, &binned);
     return x;
   }
 };

@@ -132,9 +132,9 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     }
     passes_.resetStats();
     const int threads = settings_.threadCount == 0 ? hardwareThreads() : settings_.threadCount;
-    // One team for the whole substep: the loops inside are work-shared, so the team is made once. One thread
-    // opens no team: outside one the directives cost nothing, while a team of one still pays libgomp's barrier
-    // (a futex wake-up each) for every work-shared loop.
+    // One team for the whole substep: its loops share the work (teamFor), so the team is made once. One
+    // thread opens no team: outside one the directives cost nothing, while a team of one still pays libgomp's
+    // barrier (a futex wake-up each) after every loop.
     if (threads > 1) {
       DRAPE_OMP(parallel num_threads(threads))
       subStepBody(S(hd));
@@ -179,8 +179,9 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     Vec4<S>* xw = packed_.data();
     const S* w = state_.invMass.data();
     const Index n = vertexCount();
-    withFlags([&](auto keepStart) { predictPositions<keepStart()>(n, x, v, w, gh, h, x0, xp, xw); },
-              hasFriction_ || coupled_);
+    withFlags([&](auto keepStart) {
+      teamFor(n, [&](Index b, Index e) { predictPositions<keepStart()>(b, e, x, v, w, gh, h, x0, xp, xw); });
+    }, hasFriction_ || coupled_);
   }
 
   /// 2. iterationCount passes over the constraints, set by set, then the pins; the in-solve method's contacts
@@ -217,9 +218,9 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
       if (inSolve) {  // contacts inside the solve, on the unpacked positions
         unpack(x, xw);
         collideInSolve(h, S(settings_.thickness));
-        const Index n = vertexCount();
-        DRAPE_OMP(for schedule(static))
-        for (Index i = 0; i < n; ++i) xw[i].template head<3>() = x[i];
+        teamFor(vertexCount(), [&](Index b, Index e) {
+          for (Index i = b; i < e; ++i) xw[i].template head<3>() = x[i];
+        });
       }
     }
   }
@@ -236,13 +237,18 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     Vec4<S>* xw = packed_.data();
     const S invH = S(1) / h;
     if (passes_.measuresDrift()) {
-      const S far = withFlags(
-          [&](auto keep) { return updateVelocities<keep(), true>(n, xw, xp, x, v, invH, passes_.binned()); },
-          reconcile_);
+      S far = 0;
+      withFlags([&](auto keep) {
+        teamForNoWait(n, [&](Index b, Index e) {
+          far = updateVelocities<keep(), true>(b, e, xw, xp, x, v, invH, passes_.binned());
+        });
+      }, reconcile_);
       passes_.addUpdateDrift(far);
       DRAPE_OMP(barrier)
     } else {
-      withFlags([&](auto keep) { updateVelocities<keep(), false>(n, xw, xp, x, v, invH); }, reconcile_);
+      withFlags([&](auto keep) {
+        teamFor(n, [&](Index b, Index e) { updateVelocities<keep(), false>(b, e, xw, xp, x, v, invH); });
+      }, reconcile_);
     }
   }
 
@@ -253,17 +259,17 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     for (DistanceBlocks<S>& b : blocks_) b.gatherMasses(state_.invMass.data());
   }
 
-  /// The packed positions back into the state (a work-shared loop).
+  /// The packed positions back into the state.
   void unpack(Vec3<S>* x, const Vec4<S>* xw) {
-    DRAPE_OMP(for schedule(static))
-    for (Index i = 0; i < vertexCount(); ++i) x[i] = xw[i].template head<3>();
+    teamFor(vertexCount(), [&](Index b, Index e) {
+      for (Index i = b; i < e; ++i) x[i] = xw[i].template head<3>();
+    });
   }
 
   void copyVelocities(std::vector<Vec3<S>>& to) {
     const Vec3<S>* v = state_.v.data();
     Vec3<S>* out = to.data();
-    DRAPE_OMP(for schedule(static))
-    for (Index i = 0; i < vertexCount(); ++i) out[i] = v[i];
+    teamFor(vertexCount(), [&](Index b, Index e) { std::copy(v + b, v + e, out + b); });
   }
 
   void repel(S thickness, S h) {
@@ -272,12 +278,14 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
       for (const auto& solid : list) {
         if (!(solid.repulsionRadius > S(0))) continue;
         if (solid.motion.body >= 0) copyVelocities(vPre_);  // scratch: what the region changes is an impulse
-        if (solid.falloff == Falloff::Linear)
-          coupling::repelVertices<Falloff::Linear>(solid, thickness, state_.x.data(), v, state_.invMass.data(),
-                                                   vertexCount());
-        else
-          coupling::repelVertices<Falloff::Smooth>(solid, thickness, state_.x.data(), v, state_.invMass.data(),
-                                                   vertexCount());
+        teamFor(vertexCount(), [&](Index b, Index e) {
+          if (solid.falloff == Falloff::Linear)
+            coupling::repelVertices<Falloff::Linear>(b, e, solid, thickness, this->state_.x.data(), v,
+                                                     this->state_.invMass.data());
+          else
+            coupling::repelVertices<Falloff::Smooth>(b, e, solid, thickness, this->state_.x.data(), v,
+                                                     this->state_.invMass.data());
+        });
         if (solid.motion.body >= 0) {
           const std::size_t b = std::size_t(solid.motion.body);
           DRAPE_OMP(single)
@@ -310,9 +318,16 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     coupling::addPinches(bodySums_, bodyForce_, bodyTorque_);
   }
 
+  /// One pass over a constraint set, colour after colour, each colour's items shared by the team.
   void solveSet(const DistanceSet<S>& set, const DistanceBlocks<S>& blocks, S alpha, S* lambda, int iterations) {
+    const SimdLevel level = simdLevelFor<S>(bestSimdLevel());
+    Vec4<S>* xw = packed_.data();
+    const S* w = state_.invMass.data();
     withFlags([&](auto useLambda) {
-      solveDistanceSet<useLambda()>(set, blocks, alpha, lambda, packed_.data(), state_.invMass.data());
+      for (Index c = 0; c < set.colourCount(); ++c)
+        teamFor(colourItems(set, blocks, c, level), [&](Index b, Index e) {
+          solveDistanceColour<useLambda()>(b, e, c, set, blocks, alpha, lambda, xw, w, level);
+        });
     }, iterations > 1 && alpha > S(0));
   }
 
@@ -329,7 +344,10 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
   /// position-level friction; the velocity update then turns every projection into velocity.
   void collideInSolve(S h, S thickness) {
     projectAll(thickness, true);
-    if (hasFriction_) applyContactFriction(passes_.contacts(), state_.x.data(), xPrev_.data(), h);
+    if (hasFriction_)
+      teamFor(vertexCount(), [&](Index b, Index e) {
+        applyContactFriction(b, e, passes_.contacts(), this->state_.x.data(), xPrev_.data(), h);
+      });
   }
 
   /// The velocity split with friction, then (with faces) propagation, after the contacts were projected.
@@ -338,12 +356,20 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     Vec3<S>* v = state_.v.data();
     const S* w = state_.invMass.data();
     const bool faces = settings_.collisionMethod == CollisionMethod::Faces;
+    const S damping = S(settings_.normalDamping);
     withFlags([&](auto friction) {
-      respondContacts<friction()>(passes_.contacts(), x, xPrev_.data(), v, h, S(settings_.normalDamping));
+      teamFor(vertexCount(), [&](Index b, Index e) {
+        respondContacts<friction()>(b, e, passes_.contacts(), x, xPrev_.data(), v, h, damping);
+      });
     }, hasFriction_);
-    if (faces && settings_.propagationRings > 0 && settings_.propagationWeight > 0)
-      propagateCorrections(passes_.contacts(), propagation_, asset_->vertexNeighbours, v, w, S(settings_.propagationWeight),
-                           settings_.propagationRings);
+    if (!(faces && settings_.propagationRings > 0 && settings_.propagationWeight > 0)) return;
+    DRAPE_OMP(single)
+    propagation_.beginPass();
+    const S weight = S(settings_.propagationWeight);
+    for (int ring = 1; ring <= settings_.propagationRings; ++ring)
+      teamFor(vertexCount(), [&](Index b, Index e) {
+        propagateRing(b, e, ring, passes_.contacts(), propagation_, asset_->vertexNeighbours, v, w, weight);
+      });
   }
 
 

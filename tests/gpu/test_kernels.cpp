@@ -104,7 +104,7 @@ TEST_CASE("predict: the GPU kernel against predictPositions", "[gpu]") {
 
   std::vector<Vec3<float>> v = r.v, xp(n);
   std::vector<Vec4<float>> xw(n);
-  drape::predictPositions<false, float>(n, r.x.data(), v.data(), r.w.data(), gh, h, nullptr, xp.data(), xw.data());
+  drape::predictPositions<false, float>(0, n, r.x.data(), v.data(), r.w.data(), gh, h, nullptr, xp.data(), xw.data());
 
   drape::gpu::Buffer<Vertex> gx(toVertices(r.x, r.w)), gv(toVertices(r.v, {})), gp{std::vector<Vertex>(std::size_t(n))},
       gw{std::vector<Vertex>(std::size_t(n))};
@@ -145,7 +145,7 @@ TEST_CASE("update velocity: the GPU kernel against updateVelocities", "[gpu]") {
   }
   std::vector<Vertex> packed(n);
   for (Index i = 0; i < n; ++i) packed[std::size_t(i)] = {xw[std::size_t(i)].x(), xw[std::size_t(i)].y(), xw[std::size_t(i)].z(), xw[std::size_t(i)].w()};
-  drape::updateVelocities<false, false>(n, xw.data(), xp.data(), x.data(), v.data(), invH);
+  drape::updateVelocities<false, false>(0, n, xw.data(), xp.data(), x.data(), v.data(), invH);
 
   drape::gpu::Buffer<Vertex> gx(toVertices(start.x, start.w)), gv(toVertices(start.v, {})), gp(toVertices(xp, {})),
       gw(packed);

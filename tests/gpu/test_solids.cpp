@@ -97,8 +97,7 @@ TEST_CASE("settle: the GPU placement outside several contact planes against proj
   const int n = 3000;
   RandomContacts r(n, 7);
   std::vector<Vec3<float>> x = r.x;
-  float moveBound = 0;
-  drape::projectOntoContactPlanes(r.cpu, x.data(), r.reference.data(), r.x.data(), moveBound);
+  drape::projectOntoContactPlanes(0, n, r.cpu, x.data(), r.reference.data(), r.x.data());
 
   drape::gpu::Buffer<layout::Vertex> gx(packed(r.x, 1.0f)), gref(packed(r.reference, 1.0f));
   drape::gpu::Buffer<layout::Contact> gc(r.gpu);
@@ -134,9 +133,9 @@ TEST_CASE("respond: the GPU split of several surfaces against respondContacts", 
   const float h = 1.0f / 600, damping = 0.1f;
   std::vector<Vec3<float>> x = r.x, v = r.v;
   if (friction)
-    drape::respondContacts<true>(r.cpu, x.data(), r.xStart.data(), v.data(), h, damping);
+    drape::respondContacts<true>(0, n, r.cpu, x.data(), r.xStart.data(), v.data(), h, damping);
   else
-    drape::respondContacts<false>(r.cpu, x.data(), r.xStart.data(), v.data(), h, damping);
+    drape::respondContacts<false>(0, n, r.cpu, x.data(), r.xStart.data(), v.data(), h, damping);
 
   drape::gpu::Buffer<layout::Vertex> gx(packed(r.x, 1.0f)), gv(packed(r.v, 0.0f)), gs(packed(r.xStart, 1.0f));
   drape::gpu::Buffer<layout::Contact> gc(r.gpu);

@@ -2,22 +2,20 @@
 // The two per-vertex passes around the constraint solve (docs/design.md §1, steps 1 and 3): the prediction,
 // which writes the packed positions the solve works on, and the velocity update, which reads them back.
 
-#include <drape/detail/parallel.hpp>
 #include <drape/math.hpp>
 
 #include <algorithm>
 
 namespace drape {
 
-/// Step 1 for vertices [0, n): a free vertex (inverse mass w != 0) gains gh = h g of velocity and moves h v;
-/// a pinned one stays. The predicted position goes to xp (for the velocity update) and, as (p, 0), to the
+/// Step 1 for vertices [begin, end): a free vertex (inverse mass w != 0) gains gh = h g of velocity and moves
+/// h v; a pinned one stays. The predicted position goes to xp (for the velocity update) and, as (p, 0), to the
 /// packed positions xw. The start positions x are not changed; with kKeepStart they are also copied to x0
-/// (for friction and the energy estimate, which read them after x is updated). A work-shared loop.
+/// (for friction and the energy estimate, which read them after x is updated).
 template <bool kKeepStart, Scalar S>
-void predictPositions(Index n, const Vec3<S>* x, Vec3<S>* v, const S* w, const Vec3<S>& gh, S h, Vec3<S>* x0,
-                      Vec3<S>* xp, Vec4<S>* xw) {
-  DRAPE_OMP(for schedule(static))
-  for (Index i = 0; i < n; ++i) {
+void predictPositions(Index begin, Index end, const Vec3<S>* x, Vec3<S>* v, const S* w, const Vec3<S>& gh, S h,
+                      Vec3<S>* x0, Vec3<S>* xp, Vec4<S>* xw) {
+  for (Index i = begin; i < end; ++i) {
     if constexpr (kKeepStart) x0[i] = x[i];
     Vec3<S> p = x[i];
     if (w[i] != S(0)) {
@@ -29,18 +27,17 @@ void predictPositions(Index n, const Vec3<S>* x, Vec3<S>* v, const S* w, const V
   }
 }
 
-/// Step 3: v = (x - x_start) / h, computed as v + (x - x_predicted) / h so that the rounding of the prediction
-/// x_start + h v (in float, an ulp of the position, i.e. ulp / h of speed: 4e-4 m/s at 0.5 m and h = 1/1200 s)
-/// does not enter the velocity; free flight keeps v exact. The solved positions xw go back to x, and with
-/// kKeepSolved also to xp (where the pinched vertices' least-squares placement starts from). With kDrift, returns
-/// the largest squared distance of this thread's vertices from `reference` (the broad phase's binned positions),
-/// else 0. A work-shared loop.
+/// Step 3 for vertices [begin, end): v = (x - x_start) / h, computed as v + (x - x_predicted) / h so that the
+/// rounding of the prediction x_start + h v (in float, an ulp of the position, i.e. ulp / h of speed: 4e-4 m/s
+/// at 0.5 m and h = 1/1200 s) does not enter the velocity; free flight keeps v exact. The solved positions xw go
+/// back to x, and with kKeepSolved also to xp (where the pinched vertices' least-squares placement starts
+/// from). With kDrift, returns the largest squared distance of these vertices from `reference` (the broad
+/// phase's binned positions), else 0.
 template <bool kKeepSolved, bool kDrift, Scalar S>
-S updateVelocities(Index n, const Vec4<S>* xw, Vec3<S>* xp, Vec3<S>* x, Vec3<S>* v, S invH,
+S updateVelocities(Index begin, Index end, const Vec4<S>* xw, Vec3<S>* xp, Vec3<S>* x, Vec3<S>* v, S invH,
                    const Vec3<S>* reference = nullptr) {
   S far = 0;
-  DRAPE_OMP(for schedule(static))
-  for (Index i = 0; i < n; ++i) {
+  for (Index i = begin; i < end; ++i) {
     const Vec3<S> p = xw[i].template head<3>();
     v[i] += (p - xp[i]) * invH;
     x[i] = p;

@@ -3,7 +3,8 @@
 // (a curved solid's, with faces on), through the broad phase's bins for bounded solids; where surfaces meet,
 // the placement outside all of a vertex's contact planes and the settle passes. It owns the contact records,
 // the bins and the bookkeeping of how far the vertices have moved since they were binned. Called by every
-// thread of the solver's team (its loops are work-shared).
+// thread of the solver's team: the vertex passes share their vertices (teamFor), the face passes and the bins
+// run on one thread.
 
 #include <drape/collision/broadphase.hpp>
 #include <drape/collision/response.hpp>
@@ -49,7 +50,7 @@ template <Scalar S> class ContactPasses {
   bool measuresDrift() const { return useBins_ && binsFresh_; }
   const Vec3<S>* binned() const { return bins_.binned(); }
   /// The velocity update's largest squared distance from the binned positions, on each thread.
-  void addUpdateDrift(S farSquared) { addMoveBound(moveBound_, std::sqrt(farSquared)); }
+  void addUpdateDrift(S farSquared) { teamAdd(moveBound_, std::sqrt(farSquared)); }
 
   /// All contacts of a substep with the solids of `compiled` (a tuple of vectors of CompiledSolid): the
   /// projections, then, where surfaces meet (a crease, a box corner, a cloth pinched between a ball and the
@@ -115,8 +116,8 @@ template <Scalar S> class ContactPasses {
           if (bins_.stale()) bins_.build(x, in.triangles);
           bins_.vertices(x, solid.boxLow, solid.boxHigh, thickness, nearVertices_);
         }
-        projectVertexContacts(solid, thickness, x, w, ItemList{nearVertices_.data()}, Index(nearVertices_.size()),
-                              contacts_, stats_, bins_.binned(), moveBound_, slack);
+        projectVertices(solid, in, ItemList{nearVertices_.data()}, Index(nearVertices_.size()), bins_.binned(),
+                        slack);
         DRAPE_OMP(single)
         {
           bins_.noteDrift(moveBound_);
@@ -131,7 +132,7 @@ template <Scalar S> class ContactPasses {
       } else {
         // Without the bins, the binned positions are the positions: nothing drifts.
         const Vec3<S>* binned = useBins_ ? bins_.binned() : x;
-        projectVertexContacts(solid, thickness, x, w, AllItems{}, n, contacts_, stats_, binned, moveBound_, slack);
+        projectVertices(solid, in, AllItems{}, n, binned, slack);
         if constexpr (kFacePass) {
           DRAPE_OMP(single)
           {
@@ -151,8 +152,30 @@ template <Scalar S> class ContactPasses {
     }
   }
 
+  /// One solid's vertex pass over ids[0, count), shared by the team. The counts and the move bound are added
+  /// once per thread (the sum of the threads' largest moves bounds the largest; only the bins read it, and the
+  /// contacts do not depend on it); the barrier after them lets every thread read the totals.
+  template <class Solid, class Ids>
+  void projectVertices(const Solid& solid, const PassInputs<S>& in, Ids ids, Index count, const Vec3<S>* binned,
+                       S slack) {
+    VertexPassShare<S> share;
+    teamForNoWait(count, [&](Index b, Index e) {
+      share = projectVertexContacts(b, e, solid, in.thickness, in.x, in.invMass, ids, contacts_, binned, slack);
+    });
+    teamAdd(stats_.vertexContacts, share.found);
+    teamAdd(stats_.sdfEvaluations, share.evaluated);
+    teamAdd(moveBound_, share.moved);
+    DRAPE_OMP(barrier)
+  }
+
   void settle(const PassInputs<S>& in) {
-    projectOntoContactPlanes(contacts_, in.x, in.settleStart, useBins_ ? bins_.binned() : in.x, moveBound_);
+    const Vec3<S>* binned = useBins_ ? bins_.binned() : in.x;
+    S moved = 0;
+    teamForNoWait(Index(contacts_.size()), [&](Index b, Index e) {
+      moved = projectOntoContactPlanes(b, e, contacts_, in.x, in.settleStart, binned);
+    });
+    teamAdd(moveBound_, moved);
+    DRAPE_OMP(barrier)
     if (useBins_) {
       DRAPE_OMP(single)
       {

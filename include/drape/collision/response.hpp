@@ -189,26 +189,22 @@ struct ItemList {
   Index operator[](Index k) const { return items[k]; }
 };
 
-/// Adds a thread's largest distance of a moved vertex from where the broad phase binned it to `bound`, once per
-/// thread after a work-shared loop: the sum over threads is at least the largest of all (an atomic add, cheaper
-/// than a critical section; only the broad phase reads it and the contacts do not depend on it, so its
-/// rounding order does not matter). Without a broad phase the binned positions are the positions themselves.
-template <Scalar S> void addMoveBound(S& bound, S mine) {
-  DRAPE_OMP(atomic)
-  bound += mine;
-}
-
-/// Moves every free vertex of `ids` (count of them) closer than `thickness` (by more than `slack`) out along
-/// the normal and records the contact; `moveBound` grows by at least the largest distance of a moved vertex
-/// from `binned` (addMoveBound). A work-shared loop; the counts are added once per thread.
-template <bool kBody, class Shape, Scalar S, class Ids>
-void projectVertexContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, Vec3<S>* x, const S* invMass,
-                             Ids ids, Index count, ContactBuffer<S>& contacts, CollisionStats& stats,
-                             const Vec3<S>* binned, S& moveBound, S slack) {
-  std::int64_t found = 0;
+/// What one share of a vertex pass did: how many vertices it moved and how many it looked at, and the largest
+/// distance of a moved vertex from where the broad phase binned it (the caller adds it to the bins' drift).
+template <Scalar S> struct VertexPassShare {
+  std::int64_t found = 0, evaluated = 0;
   S moved = 0;
-  DRAPE_OMP(for schedule(static) nowait)
-  for (Index k = 0; k < count; ++k) {
+};
+
+/// Moves every free vertex of ids[begin, end) closer than `thickness` (by more than `slack`) out along the
+/// normal and records the contact. Without a broad phase, `binned` is the positions themselves.
+template <bool kBody, class Shape, Scalar S, class Ids>
+VertexPassShare<S> projectVertexContactsAs(Index begin, Index end, const CompiledSolid<Shape, S>& solid,
+                                           S thickness, Vec3<S>* x, const S* invMass, Ids ids,
+                                           ContactBuffer<S>& contacts, const Vec3<S>* binned, S slack) {
+  VertexPassShare<S> share;
+  S moved = 0;
+  for (Index k = begin; k < end; ++k) {
     const Index i = ids[k];
     if (invMass[i] == S(0)) continue;
     Vec3<S> n;
@@ -218,21 +214,18 @@ void projectVertexContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, 
     x[i] += dn * n;
     contacts.template record<kBody>(i, x[i], n, dn, solid.motion, x[i]);
     moved = std::max(moved, (x[i] - binned[i]).squaredNorm());
-    ++found;
+    ++share.found;
   }
-  DRAPE_OMP(atomic)
-  stats.vertexContacts += found;
-  DRAPE_OMP(atomic)
-  stats.sdfEvaluations += count;
-  addMoveBound(moveBound, std::sqrt(moved));
-  DRAPE_OMP(barrier)
+  share.evaluated = end - begin;
+  share.moved = std::sqrt(moved);
+  return share;
 }
 template <class Shape, Scalar S, class Ids>
-void projectVertexContacts(const CompiledSolid<Shape, S>& solid, S thickness, Vec3<S>* x, const S* invMass, Ids ids,
-                           Index count, ContactBuffer<S>& contacts, CollisionStats& stats, const Vec3<S>* binned,
-                           S& moveBound, S slack = S(0)) {
-  withFlags([&](auto body) {
-    projectVertexContactsAs<body()>(solid, thickness, x, invMass, ids, count, contacts, stats, binned, moveBound, slack);
+VertexPassShare<S> projectVertexContacts(Index begin, Index end, const CompiledSolid<Shape, S>& solid, S thickness,
+                                         Vec3<S>* x, const S* invMass, Ids ids, ContactBuffer<S>& contacts,
+                                         const Vec3<S>* binned, S slack = S(0)) {
+  return withFlags([&](auto body) {
+    return projectVertexContactsAs<body()>(begin, end, solid, thickness, x, invMass, ids, contacts, binned, slack);
   }, solid.motion.body >= 0);
 }
 
@@ -360,15 +353,13 @@ Vec3<S> nearestInHalfSpaces(const Vec3<S>* n, const S* b, int count, const Vec3<
 /// contact half-spaces at once (nearestInHalfSpaces). A pinched vertex starts its least-squares placement
 /// from `reference` (where it was before this substep's contacts moved it): the projections it went through
 /// on the way, some of them sideways off an edge, are forgotten rather than repeated every substep, which
-/// would feed the constraint solve a sideways jump each substep. `moveBound` grows by at least the largest
-/// distance of a moved vertex from `binned` (addMoveBound).
+/// would feed the constraint solve a sideways jump each substep. For vertices [begin, end); returns the
+/// largest distance of a moved vertex from `binned`.
 template <Scalar S>
-void projectOntoContactPlanes(const ContactBuffer<S>& contacts, Vec3<S>* x, const Vec3<S>* reference,
-                              const Vec3<S>* binned, S& moveBound) {
-  const Index n = contacts.size();
+S projectOntoContactPlanes(Index begin, Index end, const ContactBuffer<S>& contacts, Vec3<S>* x,
+                           const Vec3<S>* reference, const Vec3<S>* binned) {
   S moved = 0;
-  DRAPE_OMP(for schedule(static) nowait)
-  for (Index i = 0; i < n; ++i) {
+  for (Index i = begin; i < end; ++i) {
     if (!contacts.live(i)) continue;
     const int count = contacts.slotCount[i];
     // A surface that joined another direction's slot is not in the planes: the corner they make may lie deep
@@ -382,8 +373,7 @@ void projectOntoContactPlanes(const ContactBuffer<S>& contacts, Vec3<S>* x, cons
     x[i] = nearestInHalfSpaces(normals, offsets, count, x[i], reference[i]);
     moved = std::max(moved, (x[i] - binned[i]).squaredNorm());
   }
-  addMoveBound(moveBound, std::sqrt(moved));
-  DRAPE_OMP(barrier)
+  return std::sqrt(moved);
 }
 
 /// Coulomb friction on positions for one contact surface: the tangential displacement of this substep
@@ -402,7 +392,7 @@ template <Scalar S> bool applyPositionFriction(const ContactSlot<S>& c, Vec3<S>&
   return false;
 }
 
-/// The velocity split of the SDF collision paper (Fig 3) for every contact vertex and each surface it touches, relative
+/// The velocity split of the SDF collision paper (Fig 3) for every contact vertex of [begin, end) and each surface it touches, relative
 /// to that solid: the approaching normal velocity is removed, a separating one is damped by normalDamping, the
 /// tangential velocity is kept minus Coulomb friction. Friction acts on positions (applyPositionFriction); a
 /// stuck vertex keeps no tangential velocity, a sliding one loses dynamicFriction * dn / h of its tangential
@@ -410,12 +400,10 @@ template <Scalar S> bool applyPositionFriction(const ContactSlot<S>& c, Vec3<S>&
 /// position (that mismatch makes a stuck cloth crawl downhill in stick-slip waves). kFriction false (no solid
 /// of the scene has friction) compiles the friction out.
 template <bool kFriction, Scalar S>
-void respondContacts(ContactBuffer<S>& contacts, Vec3<S>* x, const Vec3<S>* xPrev, Vec3<S>* v, S h,
-                     S normalDamping) {
+void respondContacts(Index begin, Index end, ContactBuffer<S>& contacts, Vec3<S>* x, const Vec3<S>* xPrev,
+                     Vec3<S>* v, S h, S normalDamping) {
   const S invH = S(1) / h;
-  const Index vertices = contacts.size();
-  DRAPE_OMP(for schedule(static))
-  for (Index i = 0; i < vertices; ++i) {
+  for (Index i = begin; i < end; ++i) {
     if (!contacts.live(i)) continue;
     S dvnSum = 0;
     for (int k = 0; k < contacts.slotCount[i]; ++k) {
@@ -457,11 +445,12 @@ void respondContacts(ContactBuffer<S>& contacts, Vec3<S>* x, const Vec3<S>* xPre
   }
 }
 
-/// The in-solve method's friction: position-level Coulomb friction for every contact of the current solve pass.
-template <Scalar S> void applyContactFriction(const ContactBuffer<S>& contacts, Vec3<S>* x, const Vec3<S>* xPrev, S h) {
-  const Index n = contacts.size();
-  DRAPE_OMP(for schedule(static))
-  for (Index i = 0; i < n; ++i)
+/// The in-solve method's friction: position-level Coulomb friction for every contact of the current solve pass,
+/// on vertices [begin, end).
+template <Scalar S>
+void applyContactFriction(Index begin, Index end, const ContactBuffer<S>& contacts, Vec3<S>* x, const Vec3<S>* xPrev,
+                          S h) {
+  for (Index i = begin; i < end; ++i)
     if (contacts.live(i))
       for (int k = 0; k < contacts.slotCount[i]; ++k) applyPositionFriction(contacts.slots[i][k], x[i], xPrev[i], h);
 }
@@ -482,6 +471,8 @@ template <Scalar S> struct PropagationBuffer {
     velocity.resize(n);
     amount.resize(n);
   }
+  /// Starts a propagation: the rings of earlier ones no longer count as reached.
+  void beginPass() { ++pass; }
   std::uint64_t key(int ring) const { return pass * 16 + std::uint64_t(ring); }
   bool reachedThisPass(Index j) const { return reach[0][j] >= pass * 16 || reach[1][j] >= pass * 16; }
 };
@@ -489,57 +480,52 @@ template <Scalar S> struct PropagationBuffer {
 /// Spreads the contacts' normal velocity corrections to the vertices around them (the SDF collision paper): ring r gets
 /// weight^r of the mean correction of its sources, along their mean normal, and only as much as removes its
 /// own approach toward the solid, so a neighbour is never pushed away (which would make the seam shake).
-/// Each vertex gathers from its neighbours in the ring before (a work-shared loop per ring; the GPU kernel
-/// gathers the same way), so the sums have one order whatever the thread count.
+/// Each vertex gathers from its neighbours in the ring before (the GPU kernel gathers the same way), so the
+/// sums have one order whatever the thread count. This is ring `ring` (1, 2, ...) for vertices [begin, end),
+/// after buf.beginPass(); ring r + 1 starts when every vertex is done with ring r.
 template <Scalar S>
-void propagateCorrections(const ContactBuffer<S>& contacts, PropagationBuffer<S>& buf, const Adjacency& neighbours,
-                          Vec3<S>* v, const S* invMass, S weight, int rings) {
-  const Index n = contacts.size();
+void propagateRing(Index begin, Index end, int ring, const ContactBuffer<S>& contacts, PropagationBuffer<S>& buf,
+                   const Adjacency& neighbours, Vec3<S>* v, const S* invMass, S weight) {
   const std::uint32_t mark = contacts.current;
-  DRAPE_OMP(single)
-  ++buf.pass;
-  for (int ring = 1; ring <= rings; ++ring) {
-    const std::uint64_t from = buf.key(ring - 1), to = buf.key(ring);
-    const std::uint64_t* reachFrom = buf.reach[(ring - 1) & 1].data();
-    std::uint64_t* reachTo = buf.reach[ring & 1].data();
-    DRAPE_OMP(for schedule(static))
-    for (Index j = 0; j < n; ++j) {
-      if (contacts.stamp[j] == mark || invMass[j] == S(0)) continue;
-      if (ring > 1 && buf.reachedThisPass(j)) continue;  // settled in an earlier ring
-      Vec3<S> normalSum = Vec3<S>::Zero(), velocitySum = Vec3<S>::Zero();
-      S amountSum = 0;
-      int count = 0;
-      for (const Index* it = neighbours.begin(j); it != neighbours.end(j); ++it) {
-        const Index i = *it;
-        if (ring == 1) {
-          if (contacts.stamp[i] != mark || contacts.normalDv[i] <= S(0)) continue;
-          normalSum += contacts.normal(i);
-          velocitySum += contacts.solidVelocity(i);
-          amountSum += contacts.normalDv[i];
-        } else {
-          if (reachFrom[i] != from || buf.amount[i] <= S(0)) continue;
-          normalSum += buf.normal[i];
-          velocitySum += buf.velocity[i];
-          amountSum += buf.amount[i];
-        }
-        ++count;
+  const std::uint64_t from = buf.key(ring - 1), to = buf.key(ring);
+  const std::uint64_t* reachFrom = buf.reach[(ring - 1) & 1].data();
+  std::uint64_t* reachTo = buf.reach[ring & 1].data();
+  for (Index j = begin; j < end; ++j) {
+    if (contacts.stamp[j] == mark || invMass[j] == S(0)) continue;
+    if (ring > 1 && buf.reachedThisPass(j)) continue;  // settled in an earlier ring
+    Vec3<S> normalSum = Vec3<S>::Zero(), velocitySum = Vec3<S>::Zero();
+    S amountSum = 0;
+    int count = 0;
+    for (const Index* it = neighbours.begin(j); it != neighbours.end(j); ++it) {
+      const Index i = *it;
+      if (ring == 1) {
+        if (contacts.stamp[i] != mark || contacts.normalDv[i] <= S(0)) continue;
+        normalSum += contacts.normal(i);
+        velocitySum += contacts.solidVelocity(i);
+        amountSum += contacts.normalDv[i];
+      } else {
+        if (reachFrom[i] != from || buf.amount[i] <= S(0)) continue;
+        normalSum += buf.normal[i];
+        velocitySum += buf.velocity[i];
+        amountSum += buf.amount[i];
       }
-      if (count == 0) continue;
-      reachTo[j] = to;
-      buf.amount[j] = 0;
-      const S len = normalSum.norm();
-      if (len <= S(0)) continue;
-      const S inv = S(1) / S(count);
-      const Vec3<S> nj = normalSum / len;
-      const Vec3<S> vc = velocitySum * inv;
-      const S approach = -nj.dot(v[j] - vc);
-      const S give = weight * amountSum * inv;
-      if (approach > S(0)) v[j] += std::min(approach, give) * nj;
-      // The next ring sees this ring's share, not what it happened to need.
-      buf.amount[j] = give;
-      buf.normal[j] = nj;
-      buf.velocity[j] = vc;
+      ++count;
     }
+    if (count == 0) continue;
+    reachTo[j] = to;
+    buf.amount[j] = 0;
+    const S len = normalSum.norm();
+    if (len <= S(0)) continue;
+    const S inv = S(1) / S(count);
+    const Vec3<S> nj = normalSum / len;
+    const Vec3<S> vc = velocitySum * inv;
+    const S approach = -nj.dot(v[j] - vc);
+    const S give = weight * amountSum * inv;
+    if (approach > S(0)) v[j] += std::min(approach, give) * nj;
+    // The next ring sees this ring's share, not what it happened to need.
+    buf.amount[j] = give;
+    buf.normal[j] = nj;
+    buf.velocity[j] = vc;
   }
 }
 

@@ -12,7 +12,6 @@
 // differently from the AVX2 kernel, which never fuses. Each kernel is still deterministic.)
 
 #include <drape/cloth/asset.hpp>
-#include <drape/detail/parallel.hpp>
 
 #if defined(__SSE2__) || defined(_M_X64) || (defined(_M_IX86_FP) && _M_IX86_FP >= 2)
 #include <emmintrin.h>
@@ -247,37 +246,23 @@ DRAPE_TARGET_AVX2 inline void solveDistanceBlockPair(const DistanceBlock<float>*
   storePair(base + p.b[3], base + q.b[3], _mm256_sub_ps(b3, _mm256_mul_ps(_mm256_shuffle_ps(sb, sb, 0xff), d3)));
 }
 
-/// One colour's blocks [begin, end) through the AVX2 kernel, two at a time (an odd last one through the SSE
-/// kernel, VEX-encoded here), as a work-shared loop over the pairs.
+/// Items [begin, end) of the colour whose blocks start at `first`: item j < pairs is the pair of blocks
+/// first + 2 j, 2 j + 1 through the AVX2 kernel; an odd last block is the item after the pairs, through the SSE
+/// kernel (VEX-encoded here). The odd block shares no vertex with the pairs (one colour).
 template <bool kLambda>
-DRAPE_TARGET_AVX2 void solveColourAvx2(const DistanceBlock<float>* blocks, Index begin, Index end,
-                                                     const float* massA, const float* massB, float alphaTilde,
-                                                     float* lambda, Vec4<float>* xw) {
+DRAPE_TARGET_AVX2 void solveColourAvx2(Index begin, Index end, const DistanceBlock<float>* blocks, Index first,
+                                       Index pairs, const float* massA, const float* massB, float alphaTilde,
+                                       float* lambda, Vec4<float>* xw) {
   constexpr Index kLanes = DistanceBlock<float>::kLanes;
-  const Index pairs = (end - begin) / 2;
-  const Index odd = (end - begin) % 2;
-  // The odd block shares no vertex with the pairs (one colour), so a thread done with its pairs may start it.
-  DRAPE_OMP(for schedule(static) nowait)
-  for (Index j = 0; j < pairs; ++j) {
-    const Index k = begin + 2 * j;
-    solveDistanceBlockPair<kLambda>(blocks + k, massA + k * kLanes, massB + k * kLanes, alphaTilde,
-                                    kLambda ? lambda + k * kLanes : nullptr, xw);
+  for (Index j = begin; j < end; ++j) {
+    const Index k = first + 2 * j;
+    if (j < pairs)
+      solveDistanceBlockPair<kLambda>(blocks + k, massA + k * kLanes, massB + k * kLanes, alphaTilde,
+                                      kLambda ? lambda + k * kLanes : nullptr, xw);
+    else
+      solveDistanceBlock<kLambda>(blocks[k], massA + k * kLanes, massB + k * kLanes, _mm_set1_ps(alphaTilde),
+                                  kLambda ? lambda + k * kLanes : nullptr, xw);
   }
-  if (!odd) {
-    DRAPE_OMP(barrier)
-    return;
-  }
-  DRAPE_OMP(single)
-  solveDistanceBlock<kLambda>(blocks[end - 1], massA + (end - 1) * kLanes, massB + (end - 1) * kLanes,
-                              _mm_set1_ps(alphaTilde), kLambda ? lambda + (end - 1) * kLanes : nullptr, xw);
-}
-
-template <bool kLambda>
-DRAPE_TARGET_AVX2 void solveSetAvx2(const DistanceBlocks<float>& set, float alphaTilde, float* lambda,
-                                   Vec4<float>* xw) {
-  for (Index c = 0; c + 1 < Index(set.blockOffsets.size()); ++c)
-    solveColourAvx2<kLambda>(set.blocks.data(), set.blockOffsets[c], set.blockOffsets[c + 1], set.massA.data(),
-                             set.massB.data(), alphaTilde, lambda, xw);
 }
 #undef DRAPE_TARGET_AVX2
 #endif
@@ -304,58 +289,74 @@ inline SimdLevel bestSimdLevel() {
 #endif
 }
 
-/// One pass over `set` on packed positions xw (x, y, z, 0) with the vertices' inverse masses; the float SIMD
-/// kernels read the same constraints from `blocks` (built from `set`, its masses gathered). alphaTilde = compliance / h^2; lambda holds the accumulated multipliers of this substep
-/// (zeroed at its start), blocks.lambdaCount(set) of them; it may be null when kLambda is false. kLambda false drops the multipliers: exact when they cannot matter, i.e. for
-/// rigid constraints (alphaTilde 0) or a single pass per substep (lambda is 0 on entry and never read again),
-/// and it saves a load, a store and a multiply per constraint.
-/// Constraints of one colour share no vertex, so each colour is a work-shared loop when called inside a
-/// parallel region; the implicit barrier after it orders the colours. Threads share a colour's work in whole
-/// blocks, so the result does not depend on their number.
-/// `level` picks the kernel (bestSimdLevel() by default; a level this build or processor lacks falls back to
-/// the next narrower one). The levels give the same bits, but the multipliers are kept per lane by the SIMD
-/// kernels and per constraint by the scalar one, so one lambda array serves one level.
+/// The kernel a solve at `level` runs for scalar type S: a level this build or processor lacks falls back to the
+/// next narrower one; double always runs the scalar kernel.
+template <Scalar S> SimdLevel simdLevelFor(SimdLevel level) {
+  if constexpr (!std::is_same_v<S, float>) return SimdLevel::Scalar;
+  return level > bestSimdLevel() ? bestSimdLevel() : level;
+}
+
+/// How many items colour c of a set has for the kernel of `level` (simdLevelFor): its constraints (scalar), its
+/// blocks (SSE2), or its pairs of blocks and an odd last block (AVX2). Threads share a colour's work in whole
+/// items, which write disjoint vertices, so the result does not depend on their number.
+template <Scalar S>
+Index colourItems(const DistanceSet<S>& set, const DistanceBlocks<S>& blocks, Index c, SimdLevel level) {
+  if (level == SimdLevel::Scalar) return set.colourOffsets[c + 1] - set.colourOffsets[c];
+  const Index count = blocks.blockOffsets[c + 1] - blocks.blockOffsets[c];
+  return level == SimdLevel::Avx2 ? (count + 1) / 2 : count;
+}
+
+/// Items [begin, end) of colour c (colourItems) of one pass over `set`, on packed positions xw (x, y, z, 0)
+/// with the vertices' inverse masses; the float SIMD kernels read the same constraints from `blocks` (built
+/// from `set`, its masses gathered). `level` must come from simdLevelFor. alphaTilde = compliance / h^2; lambda
+/// holds the accumulated multipliers of this substep (zeroed at its start), blocks.lambdaCount(set) of them; it
+/// may be null when kLambda is false. kLambda false drops the multipliers: exact when they cannot matter, i.e.
+/// for rigid constraints (alphaTilde 0) or a single pass per substep (lambda is 0 on entry and never read
+/// again), and it saves a load, a store and a multiply per constraint. The levels give the same bits, but the
+/// multipliers are kept per lane by the SIMD kernels and per constraint by the scalar one, so one lambda array
+/// serves one level. Colours must be solved in order, each one whole before the next starts.
+template <bool kLambda, Scalar S>
+void solveDistanceColour(Index begin, Index end, Index c, const DistanceSet<S>& set, const DistanceBlocks<S>& blocks,
+                         S alphaTilde, S* lambda, Vec4<S>* xw, const S* invMass, SimdLevel level) {
+  if constexpr (std::is_same_v<S, float>) {
+    [[maybe_unused]] constexpr Index kLanes = DistanceBlock<S>::kLanes;
+    [[maybe_unused]] const Index first = blocks.blockOffsets[c];
+#if DRAPE_AVX2
+    if (level == SimdLevel::Avx2) {
+      const Index pairs = (blocks.blockOffsets[c + 1] - first) / 2;
+      detail::solveColourAvx2<kLambda>(begin, end, blocks.blocks.data(), first, pairs, blocks.massA.data(),
+                                       blocks.massB.data(), alphaTilde, lambda, xw);
+      return;
+    }
+#endif
+#if DRAPE_SSE2
+    if (level == SimdLevel::Sse2) {
+      const __m128 alpha = _mm_set1_ps(alphaTilde);
+      for (Index k = first + begin; k < first + end; ++k)
+        detail::solveDistanceBlock<kLambda>(blocks.blocks[k], blocks.massA.data() + k * kLanes,
+                                            blocks.massB.data() + k * kLanes, alpha,
+                                            kLambda ? lambda + k * kLanes : nullptr, xw);
+      return;
+    }
+#endif
+  }
+  const auto* pairs = set.pairs.data();
+  const S* rest = set.restLength.data();
+  const Index first = set.colourOffsets[c];
+  for (Index k = first + begin; k < first + end; ++k)
+    detail::solveDistance<kLambda>(pairs[k][0], pairs[k][1], rest[k], alphaTilde, kLambda ? lambda + k : nullptr, xw,
+                                   invMass);
+}
+
+/// One whole pass over `set` on the calling thread (solveDistanceColour for every colour in turn), with the
+/// kernel of `level` (bestSimdLevel() by default).
 template <bool kLambda, Scalar S>
 void solveDistanceSet(const DistanceSet<S>& set, const DistanceBlocks<S>& blocks, S alphaTilde, S* lambda,
                       Vec4<S>* xw, const S* invMass, SimdLevel level = bestSimdLevel()) {
-  const Index colours = set.colourCount();
-  if (level > bestSimdLevel()) level = bestSimdLevel();
-#if DRAPE_AVX2
-  if constexpr (std::is_same_v<S, float>) {
-    if (level == SimdLevel::Avx2) {
-      detail::solveSetAvx2<kLambda>(blocks, alphaTilde, lambda, xw);
-      return;
-    }
-  }
-#endif
-#if DRAPE_SSE2
-  if constexpr (std::is_same_v<S, float>) {
-    if (level == SimdLevel::Sse2) {
-      constexpr Index kLanes = DistanceBlock<S>::kLanes;
-      const DistanceBlock<float>* block = blocks.blocks.data();
-      const float* massA = blocks.massA.data();
-      const float* massB = blocks.massB.data();
-      const __m128 alpha = _mm_set1_ps(alphaTilde);
-      for (Index c = 0; c < colours; ++c) {
-        const Index begin = blocks.blockOffsets[c], end = blocks.blockOffsets[c + 1];
-        DRAPE_OMP(for schedule(static))
-        for (Index k = begin; k < end; ++k)
-          detail::solveDistanceBlock<kLambda>(block[k], massA + k * kLanes, massB + k * kLanes, alpha,
-                                              kLambda ? lambda + k * kLanes : nullptr, xw);
-      }
-      return;
-    }
-  }
-#endif
-  const auto* pairs = set.pairs.data();
-  const S* rest = set.restLength.data();
-  for (Index c = 0; c < colours; ++c) {
-    const Index begin = set.colourOffsets[c], end = set.colourOffsets[c + 1];
-    DRAPE_OMP(for schedule(static))
-    for (Index k = begin; k < end; ++k)
-      detail::solveDistance<kLambda>(pairs[k][0], pairs[k][1], rest[k], alphaTilde, kLambda ? lambda + k : nullptr,
-                                     xw, invMass);
-  }
+  level = simdLevelFor<S>(level);
+  for (Index c = 0; c < set.colourCount(); ++c)
+    solveDistanceColour<kLambda>(0, colourItems(set, blocks, c, level), c, set, blocks, alphaTilde, lambda, xw,
+                                 invMass, level);
 }
 
 /// A vertex attached to a target point (in the cloth's local frame).

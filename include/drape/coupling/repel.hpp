@@ -3,22 +3,20 @@
 // solid, and the impulse it passes to a coupled body. The CPU twin of shaders/repel.comp.
 
 #include <drape/cloth/state.hpp>
-#include <drape/detail/parallel.hpp>
 #include <drape/sdf/solid.hpp>
 
 #include <vector>
 
 namespace drape::coupling {
 
-/// Every free vertex whose distance beyond the thickness, d = phi - thickness, lies in [0, R) has its velocity
-/// blended toward the solid's there: v' = a v + (1 - a) v_c, a = falloff(d / R) (the cloth-rigid coupling
-/// thesis, eq. 5.4). A work-shared loop; each vertex writes only its own velocity.
+/// Every free vertex of [begin, end) whose distance beyond the thickness, d = phi - thickness, lies in [0, R)
+/// has its velocity blended toward the solid's there: v' = a v + (1 - a) v_c, a = falloff(d / R) (the
+/// cloth-rigid coupling thesis, eq. 5.4). Each vertex writes only its own velocity.
 template <Falloff kFalloff, class Shape, Scalar S>
-void repelVertices(const CompiledSolid<Shape, S>& solid, S thickness, const Vec3<S>* x, Vec3<S>* v,
-                   const S* invMass, Index vertexCount) {
+void repelVertices(Index begin, Index end, const CompiledSolid<Shape, S>& solid, S thickness, const Vec3<S>* x,
+                   Vec3<S>* v, const S* invMass) {
   const S invR = S(1) / solid.repulsionRadius;
-  DRAPE_OMP(for schedule(static))
-  for (Index i = 0; i < vertexCount; ++i) {
+  for (Index i = begin; i < end; ++i) {
     if (invMass[i] == S(0)) continue;
     Vec3<S> n;
     const S t = (solid.sdf(x[i], n) - thickness) * invR;
