@@ -62,48 +62,8 @@ class TrembleMeter {
  public:
   explicit TrembleMeter(double marginFraction = 0.2) : marginFraction_(marginFraction) {}
 
-  template <ClothSolver Solver> void frame(const Solver& solver, double dtFrame, bool record) {
-    using S = typename Solver::scalar_type;
-    const Index n = solver.vertexCount();
-    const double margin = solver.settings().thickness * (1.0 + marginFraction_);
-    std::vector<double> phi(n, std::numeric_limits<double>::infinity());
-    std::vector<Eigen::Vector3d> normal(n, Eigen::Vector3d::Zero());
-    const auto& x = solver.state().x;
-    solver.forEachSolid([&](const auto& solid) {
-      for (Index i = 0; i < n; ++i) {
-        Vec3<S> g;
-        const double d = double(solid.sdf(x[i], g));
-        if (d < phi[i]) {
-          phi[i] = d;
-          normal[i] = g.template cast<double>();
-        }
-      }
-    });
-    std::vector<Eigen::Vector3d> world(n);
-    for (Index i = 0; i < n; ++i) world[i] = solver.position(i);
-    std::vector<char> near(n);
-    for (Index i = 0; i < n; ++i) near[i] = phi[i] < margin;
-    if (record && !prevWorld_.empty()) {
-      std::vector<double> vn;
-      for (Index i = 0; i < n; ++i)
-        if (near[i] && prevNear_[i]) vn.push_back(normal[i].dot(world[i] - prevWorld_[i]) / dtFrame);
-      if (!vn.empty()) {
-        double mean = 0;
-        for (double u : vn) mean += u;
-        mean /= double(vn.size());
-        for (double u : vn) {
-          sumSq_ += u * u;
-          sumSqCentred_ += (u - mean) * (u - mean);
-          max_ = std::max(max_, std::abs(u));
-          maxCentred_ = std::max(maxCentred_, std::abs(u - mean));
-        }
-        samples_ += vn.size();
-      }
-      contactFraction_ = double(vn.size()) / double(n);
-    }
-    prevWorld_ = std::move(world);
-    prevNear_ = std::move(near);
-  }
+  /// Records one frame of the solver's state, dtFrame after the last; `record` false only remembers it.
+  template <ClothSolver Solver> void frame(const Solver& solver, double dtFrame, bool record);
 
   double rms() const { return samples_ ? std::sqrt(sumSq_ / double(samples_)) : 0.0; }
   double rmsCentred() const { return samples_ ? std::sqrt(sumSqCentred_ / double(samples_)) : 0.0; }
@@ -121,4 +81,58 @@ class TrembleMeter {
   std::size_t samples_ = 0;
 };
 
+template <ClothSolver Solver> void TrembleMeter::frame(const Solver& solver, double dtFrame, bool record) {
+  using S = typename Solver::scalar_type;
+  const Index n = solver.vertexCount();
+  const double margin = solver.settings().thickness * (1.0 + marginFraction_);
+  std::vector<double> phi(n, std::numeric_limits<double>::infinity());
+  std::vector<Eigen::Vector3d> normal(n, Eigen::Vector3d::Zero());
+  const auto& x = solver.state().x;
+  solver.forEachSolid([&](const auto& solid) {
+    for (Index i = 0; i < n; ++i) {
+      Vec3<S> g;
+      const double d = double(solid.sdf(x[i], g));
+      if (d < phi[i]) {
+        phi[i] = d;
+        normal[i] = g.template cast<double>();
+      }
+    }
+  });
+  std::vector<Eigen::Vector3d> world(n);
+  for (Index i = 0; i < n; ++i) world[i] = solver.position(i);
+  std::vector<char> near(n);
+  for (Index i = 0; i < n; ++i) near[i] = phi[i] < margin;
+  if (record && !prevWorld_.empty()) {
+    std::vector<double> vn;
+    for (Index i = 0; i < n; ++i)
+      if (near[i] && prevNear_[i]) vn.push_back(normal[i].dot(world[i] - prevWorld_[i]) / dtFrame);
+    if (!vn.empty()) {
+      double mean = 0;
+      for (double u : vn) mean += u;
+      mean /= double(vn.size());
+      for (double u : vn) {
+        sumSq_ += u * u;
+        sumSqCentred_ += (u - mean) * (u - mean);
+        max_ = std::max(max_, std::abs(u));
+        maxCentred_ = std::max(maxCentred_, std::abs(u - mean));
+      }
+      samples_ += vn.size();
+    }
+    contactFraction_ = double(vn.size()) / double(n);
+  }
+  prevWorld_ = std::move(world);
+  prevNear_ = std::move(near);
+}
+
 }  // namespace drape
+
+// A program that compiles the built-in solvers once (DRAPE_EXTERN_SOLVERS, drape/solver_instances.hpp) compiles
+// the meters for them there too: with every shape's face search, they cost each test source about as much as
+// the rest of its code.
+#ifdef DRAPE_EXTERN_SOLVERS
+#include <drape/solver.hpp>
+extern template drape::PenetrationStats drape::penetration(const drape::Solver<float>&, int);
+extern template drape::PenetrationStats drape::penetration(const drape::Solver<double>&, int);
+extern template void drape::TrembleMeter::frame(const drape::Solver<float>&, double, bool);
+extern template void drape::TrembleMeter::frame(const drape::Solver<double>&, double, bool);
+#endif
