@@ -86,6 +86,30 @@ struct RigidContact {
   bool sticking = false;     ///< static friction held it in this substep
 };
 
+namespace detail {
+
+/// The rotation by |r| about r / |r|.
+inline Eigen::Quaterniond expMap(const Eigen::Vector3d& r) {
+  const double angle = r.norm();
+  if (angle == 0) return Eigen::Quaterniond::Identity();
+  return Eigen::Quaterniond(Eigen::AngleAxisd(angle, r / angle));
+}
+/// The rotation vector of q (the shorter way round).
+inline Eigen::Vector3d logMap(Eigen::Quaterniond q) {
+  if (q.w() < 0) q.coeffs() = -q.coeffs();
+  const double s = q.vec().norm();
+  if (s == 0) return Eigen::Vector3d::Zero();
+  return q.vec() * (2 * std::atan2(s, q.w()) / s);
+}
+/// The matrix of the cross product v x.
+inline Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
+  Eigen::Matrix3d m;
+  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+  return m;
+}
+
+}  // namespace detail
+
 class RigidWorld {
  public:
   static constexpr int kGround = -1;
@@ -176,23 +200,6 @@ class RigidWorld {
     for (std::size_t i = 0; i < bodies_.size(); ++i) bodies_[i].validateState([i] { return "body " + std::to_string(i); });
   }
 
-  static Eigen::Quaterniond expMap(const Eigen::Vector3d& rotationVector) {
-    const double angle = rotationVector.norm();
-    if (angle == 0) return Eigen::Quaterniond::Identity();
-    return Eigen::Quaterniond(Eigen::AngleAxisd(angle, rotationVector / angle));
-  }
-  static Eigen::Vector3d logMap(Eigen::Quaterniond q) {
-    if (q.w() < 0) q.coeffs() = -q.coeffs();
-    const double s = q.vec().norm();
-    if (s == 0) return Eigen::Vector3d::Zero();
-    return q.vec() * (2 * std::atan2(s, q.w()) / s);
-  }
-  static Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
-    Eigen::Matrix3d m;
-    m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-    return m;
-  }
-
   void integrate(double h) {
     scratch_.resize(bodies_.size());
     for (std::size_t i = 0; i < bodies_.size(); ++i) {
@@ -216,15 +223,15 @@ class RigidWorld {
           const Eigen::Vector3d wm = 0.5 * (w0 + w1), Iwm = I * wm;
           const Eigen::Vector3d f = I * (w1 - w0) + h * wm.cross(Iwm) - h * tau;
           if (f.norm() <= 1e-15 * (I * w1).norm()) break;
-          const Eigen::Matrix3d J = I + 0.5 * h * (skew(wm) * I - skew(Iwm));
+          const Eigen::Matrix3d J = I + 0.5 * h * (detail::skew(wm) * I - detail::skew(Iwm));
           w1 -= J.inverse() * f;
         }
         st.pose.position += h * st.linearVelocity;
-        st.pose.rotation = (st.pose.rotation * expMap(0.5 * h * (w0 + w1))).normalized();
+        st.pose.rotation = (st.pose.rotation * detail::expMap(0.5 * h * (w0 + w1))).normalized();
         st.angularVelocity = st.pose.rotation * w1;
       } else {
         st.pose.position += h * st.linearVelocity;
-        st.pose.rotation = (expMap(h * st.angularVelocity) * st.pose.rotation).normalized();
+        st.pose.rotation = (detail::expMap(h * st.angularVelocity) * st.pose.rotation).normalized();
       }
       s.predictedPosition = st.pose.position;
       s.predictedRotation = st.pose.rotation;
@@ -360,7 +367,7 @@ class RigidWorld {
       const Scratch& s = scratch_[i];
       b.state.linearVelocity = s.integratedVelocity + (b.state.pose.position - s.predictedPosition) / h;
       b.state.angularVelocity =
-          s.integratedAngularVelocity + logMap(b.state.pose.rotation * s.predictedRotation.conjugate()) / h;
+          s.integratedAngularVelocity + detail::logMap(b.state.pose.rotation * s.predictedRotation.conjugate()) / h;
     }
   }
 
