@@ -17,6 +17,9 @@
 #include <utility>
 #include <vector>
 
+// Each test source keeps its helpers in a namespace of its own: the tests build as unity batches.
+namespace convex_sdf_tests {
+
 namespace {
 
 using namespace drape;
@@ -700,3 +703,5 @@ TEMPLATE_TEST_CASE("a posed field is the unposed one at the point taken into the
   INFO("worst |posed - unposed| " << worstPhi << ", worst normal difference " << worstNormal);
   CHECK(worstPhi <= phiTol);
 }
+
+}  // namespace convex_sdf_tests

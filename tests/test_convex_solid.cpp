@@ -8,6 +8,9 @@
 #include <memory>
 #include <vector>
 
+// Each test source keeps its helpers in a namespace of its own: the tests build as unity batches.
+namespace convex_solid_tests {
+
 namespace {
 
 std::vector<Eigen::Vector3d> boxCorners(const Eigen::Vector3d& half) {
@@ -95,3 +98,5 @@ TEMPLATE_TEST_CASE("a cloth drapes over a cylinder lying on its side without sin
   INFO("deepest vertex " << deepest << " m inside the shell of " << thickness << " m");
   CHECK(deepest <= 0.01 * thickness);
 }
+
+}  // namespace convex_solid_tests

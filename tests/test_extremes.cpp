@@ -15,6 +15,9 @@
 #include <memory>
 #include <vector>
 
+// Each test source keeps its helpers in a namespace of its own: the tests build as unity batches.
+namespace extremes_tests {
+
 namespace {
 
 using namespace stability;
@@ -340,3 +343,5 @@ TEMPLATE_TEST_CASE("degenerate input meshes are rejected naming the triangle; ne
     CHECK(meanSpeedNow(solver) < 0.01);
   }
 }
+
+}  // namespace extremes_tests

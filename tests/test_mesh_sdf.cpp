@@ -19,6 +19,9 @@
 #include <string>
 #include <vector>
 
+// Each test source keeps its helpers in a namespace of its own: the tests build as unity batches.
+namespace mesh_sdf_tests {
+
 namespace {
 
 using namespace drape;
@@ -621,3 +624,5 @@ TEST_CASE("OBJ files: a saved mesh loads back the same; quads are split; errors 
                       Contains("dir.obj"));
   }
 }
+
+}  // namespace mesh_sdf_tests

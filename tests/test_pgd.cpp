@@ -17,6 +17,9 @@
 #include <string>
 #include <vector>
 
+// Each test source keeps its helpers in a namespace of its own: the tests build as unity batches.
+namespace pgd_tests {
+
 namespace {
 
 using drape::Vec3;
@@ -495,3 +498,5 @@ TEMPLATE_TEST_CASE("on a non-convex field the descent finds the deepest point of
     CHECK(worst <= 1e-2);
   }
 }
+
+}  // namespace pgd_tests

@@ -9,6 +9,9 @@
 #include <numbers>
 #include <random>
 
+// Each test source keeps its helpers in a namespace of its own: the tests build as unity batches.
+namespace rigid_tests {
+
 using namespace drape;
 using Eigen::Vector3d;
 
@@ -650,3 +653,5 @@ TEST_CASE("an application couples through CoupledBody: pose, velocity, mass prop
   CHECK(world.body(0).accumulatedForce().norm() < 1e-12);
   CHECK((world.body(0).accumulatedTorque() - Vector3d(0.6, 0, 0).cross(F)).norm() < 1e-12);
 }
+
+}  // namespace rigid_tests

@@ -9,6 +9,9 @@
 #include <numbers>
 #include <vector>
 
+// Each test source keeps its helpers in a namespace of its own: the tests build as unity batches.
+namespace slope_tests {
+
 using drape::CollisionMethod;
 using drape::scenes::SlopeConfig;
 using drape::scenes::runSlope;
@@ -130,3 +133,5 @@ TEMPLATE_TEST_CASE("where two walls meet, faces keeps the cloth outside both", "
     CHECK(r.maxPenetration == 0);
   }
 }
+
+}  // namespace slope_tests

@@ -28,6 +28,9 @@
 #include <limits>
 #include <memory>
 
+// Each test source keeps its helpers in a namespace of its own: the tests build as unity batches.
+namespace stability_tests {
+
 namespace {
 
 using namespace stability;
@@ -333,3 +336,5 @@ TEMPLATE_TEST_CASE("a resting cloth for 100 000 substeps: energy never grows, no
   CHECK(std::abs(meanDisp.z()) < 100 * ulp);
   CHECK(maxDisp < 1e-6);
 }
+
+}  // namespace stability_tests

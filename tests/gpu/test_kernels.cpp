@@ -191,15 +191,17 @@ TEST_CASE("solve: the GPU kernel, one dispatch per colour, against solveDistance
   std::vector<Vec4<float>> cpu = xw;
   const drape::DistanceSet<float>* sets[3] = {&asset->stretch, &asset->shear, &asset->bending};
   std::vector<std::vector<float>> lambdas(3);
-  const drape::DistanceBlocks<float> noLanes;  // the scalar kernel reads no blocks
+  const drape::DistanceBlocks<float> blocks[3] = {drape::DistanceBlocks<float>(*sets[0]),
+                                                  drape::DistanceBlocks<float>(*sets[1]),
+                                                  drape::DistanceBlocks<float>(*sets[2])};
   for (int s = 0; s < 3; ++s) lambdas[std::size_t(s)].assign(std::size_t(sets[s]->size()), 0.0f);
   for (int p = 0; p < passes; ++p)
     for (int s = 0; s < 3; ++s) {
       if (withLambda)
-        drape::solveDistanceSet<true, float>(*sets[s], noLanes, alphaTilde, lambdas[std::size_t(s)].data(), cpu.data(), w.data(),
+        drape::solveDistanceSet<true, float>(*sets[s], blocks[s], alphaTilde, lambdas[std::size_t(s)].data(), cpu.data(), w.data(),
                                       drape::SimdLevel::Scalar);
       else
-        drape::solveDistanceSet<false, float>(*sets[s], noLanes, alphaTilde, nullptr, cpu.data(), w.data(),
+        drape::solveDistanceSet<false, float>(*sets[s], blocks[s], alphaTilde, nullptr, cpu.data(), w.data(),
                                        drape::SimdLevel::Scalar);
     }
 
