@@ -134,4 +134,53 @@ TEMPLATE_TEST_CASE("where two walls meet, faces keeps the cloth outside both", "
   }
 }
 
+TEMPLATE_TEST_CASE("the trembling meter follows a vertex that bounces clear of the surface", "[trembling][metrics]",
+                   float, double) {
+  // A cloth lying on the floor at the thickness; between readings one vertex is lifted 2 cm (four thicknesses)
+  // and put back, frame after frame. The meter reads positions only, so the motion it must report is known:
+  // 2 cm per frame along the floor's normal, at that vertex alone.
+  drape::SheetDesc sheet;
+  sheet.nx = sheet.ny = 8;
+  sheet.spacing = 0.02;
+  drape::Settings settings;
+  sheet.placement.position = {0, 0, settings.thickness};
+  using Asset = drape::ClothAsset<TestType>;
+  drape::Solver<TestType> solver(std::make_shared<const Asset>(Asset::sheet(sheet)), settings);
+  solver.addSolid(drape::Solid<drape::Plane>{});
+  solver.step(1.0 / 60);  // compiles the floor; the cloth already rests on it
+  const drape::Index n = solver.vertexCount(), kicked = 3 * 8 + 4;
+  std::vector<Eigen::Vector3d> rest(static_cast<std::size_t>(n)), lifted;
+  for (drape::Index i = 0; i < n; ++i) rest[static_cast<std::size_t>(i)] = solver.position(i);
+  lifted = rest;
+  lifted[static_cast<std::size_t>(kicked)].z() += 0.02;
+
+  const double dt = 1.0 / 60, speed = 0.02 / dt;
+  const int frames = 20;
+  drape::TrembleMeter meter, all(0.2, drape::TrembleMeter::Count::All);
+  for (int f = 0; f <= frames; ++f) {
+    solver.setPositions(f % 2 ? lifted : rest);
+    meter.frame(solver, dt, f > 0);
+    all.frame(solver, dt, f > 0);
+  }
+  // Every vertex lay within the margin, so both count all of them, the bouncing one through every frame.
+  CHECK(meter.counted() == static_cast<std::size_t>(n));
+  CHECK(meter.max() == Approx(speed).epsilon(1e-4));
+  CHECK(meter.rms() == Approx(speed / std::sqrt(double(n))).epsilon(1e-4));
+  CHECK(all.rms() == Approx(meter.rms()).epsilon(1e-12));
+
+  SECTION("a cloth that never came near a solid is counted only when asked to be") {
+    for (auto& p : lifted) p.z() += 1.0;
+    for (auto& p : rest) p.z() += 1.0;
+    drape::TrembleMeter away, awayAll(0.2, drape::TrembleMeter::Count::All);
+    for (int f = 0; f <= frames; ++f) {
+      solver.setPositions(f % 2 ? lifted : rest);
+      away.frame(solver, dt, f > 0);
+      awayAll.frame(solver, dt, f > 0);
+    }
+    CHECK(away.counted() == 0);
+    CHECK(away.max() == 0);
+    CHECK(awayAll.max() == Approx(speed).epsilon(1e-4));
+  }
+}
+
 }  // namespace slope_tests

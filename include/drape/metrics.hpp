@@ -54,13 +54,18 @@ template <ClothSolver Solver> PenetrationStats penetration(const Solver& solver,
   return {std::max(0.0, -minPhi), std::max(0.0, thickness - minPhi)};
 }
 
-/// Trembling (docs/design.md §10): the normal component of (x_t - x_{t-1}) / dt_frame over vertices within
-/// thickness + margin of a solid in two consecutive frames, accumulated over the frames recorded.
-/// `rms`/`max` are as defined; `rmsCentred` removes each frame's mean normal velocity of the contact set
-/// first, so a cloth that as a whole settles or lifts does not count as trembling.
+/// Trembling (docs/design.md §10): the normal component of (x_t - x_{t-1}) / dt_frame, accumulated over the
+/// frames recorded, of every vertex that has been within thickness + margin of a solid in a recorded frame (or
+/// the frame before the first), from that frame on however far it then moves: a vertex that bounces off a
+/// surface counts while it is away, so no distance caps the reading. The normal is the nearest solid's where the
+/// vertex is. Count::All counts every vertex from the first recorded frame (a cloth that should be at rest as a
+/// whole). `rms`/`max` are as defined; `rmsCentred` removes each frame's mean normal velocity of the counted
+/// vertices first, so a cloth that as a whole settles or lifts does not count as trembling.
 class TrembleMeter {
  public:
-  explicit TrembleMeter(double marginFraction = 0.2) : marginFraction_(marginFraction) {}
+  enum class Count { Touched, All };
+  explicit TrembleMeter(double marginFraction = 0.2, Count count = Count::Touched)
+      : marginFraction_(marginFraction), countAll_(count == Count::All) {}
 
   /// Records one frame of the solver's state, dtFrame after the last; `record` false only remembers it.
   template <ClothSolver Solver> void frame(const Solver& solver, double dtFrame, bool record);
@@ -70,13 +75,17 @@ class TrembleMeter {
   double max() const { return max_; }
   double maxCentred() const { return maxCentred_; }
   std::size_t samples() const { return samples_; }
-  /// Share of vertices in contact in the last recorded frame.
+  /// Share of vertices within the margin of a solid in the last recorded frame and the one before.
   double contactFraction() const { return contactFraction_; }
+  /// How many vertices the readings cover so far.
+  std::size_t counted() const { return std::size_t(std::count(counted_.begin(), counted_.end(), char(1))); }
 
  private:
   double marginFraction_;
+  bool countAll_;
   std::vector<Eigen::Vector3d> prevWorld_;
   std::vector<char> prevNear_;
+  std::vector<char> counted_;  ///< 1 for a vertex counted from the recorded frames on (empty before the first)
   double sumSq_ = 0, sumSqCentred_ = 0, max_ = 0, maxCentred_ = 0, contactFraction_ = 0;
   std::size_t samples_ = 0;
 };
@@ -103,9 +112,14 @@ template <ClothSolver Solver> void TrembleMeter::frame(const Solver& solver, dou
   std::vector<char> near(n);
   for (Index i = 0; i < n; ++i) near[i] = phi[i] < margin;
   if (record && !prevWorld_.empty()) {
+    if (counted_.empty()) counted_.assign(std::size_t(n), countAll_ ? 1 : 0);
     std::vector<double> vn;
-    for (Index i = 0; i < n; ++i)
-      if (near[i] && prevNear_[i]) vn.push_back(normal[i].dot(world[i] - prevWorld_[i]) / dtFrame);
+    Index nearBoth = 0;
+    for (Index i = 0; i < n; ++i) {
+      if (near[i] || prevNear_[i]) counted_[i] = 1;
+      if (near[i] && prevNear_[i]) ++nearBoth;
+      if (counted_[i]) vn.push_back(normal[i].dot(world[i] - prevWorld_[i]) / dtFrame);
+    }
     if (!vn.empty()) {
       double mean = 0;
       for (double u : vn) mean += u;
@@ -118,7 +132,7 @@ template <ClothSolver Solver> void TrembleMeter::frame(const Solver& solver, dou
       }
       samples_ += vn.size();
     }
-    contactFraction_ = double(vn.size()) / double(n);
+    contactFraction_ = double(nearBoth) / double(n);
   }
   prevWorld_ = std::move(world);
   prevNear_ = std::move(near);
