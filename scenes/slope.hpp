@@ -1,6 +1,6 @@
 #pragma once
 // The inclined-plane scene of the SDF collision paper (Figs 5 and 8): a horizontal cloth above a slope falls, lands and
-// slides. Shared by the sample, the tests and the benches, so all three measure the same thing.
+// slides; or, started partly inside the slope, is pushed out of it. Shared by the sample, the tests and the benches, so all three measure the same thing.
 
 #include <drape/drape.hpp>
 
@@ -26,7 +26,9 @@ struct SlopeConfig {
   int nx = 50, ny = 80;
   double spacing = 0.02;  ///< m
   CollisionMethod method = CollisionMethod::Faces;
-  double gap = 0.05;           ///< m, vertical gap between the cloth's uphill edge and the slope at the start
+  /// m, vertical gap between the cloth's uphill edge and the slope at the start; a large one drops the cloth flat
+  /// from a height, a negative one starts its uphill part inside the slope (that edge -gap below the surface)
+  double gap = 0.05;
   double areaDensity = 0.1;    ///< kg/m^2
   double windowStart = 0.5;    ///< metrics use frames from this fraction of the run to its end
   bool penetrationEverySubstep = false;  ///< measure penetration after every substep (slow), else every frame
@@ -70,6 +72,7 @@ template <Scalar S> SlopeParts<S> slopeParts(const SlopeConfig& c) {
   detail::require(c.frames >= 1, "frames must be >= 1");
   detail::require(c.nx >= 2 && c.ny >= 2, "nx and ny must be >= 2");
   detail::requireRange(c.friction, 0, 100, "friction");
+  detail::requireRange(c.gap, -1, 100, "gap");
   const double theta = c.angleDeg * std::numbers::pi / 180.0;
   SheetDesc grid;
   grid.nx = c.nx;

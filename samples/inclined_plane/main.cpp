@@ -36,6 +36,10 @@ int main(int argc, char** argv) {
   app.add_option("--nx", c.nx, "vertices across")->check(CLI::Range(2, 4096))->capture_default_str();
   app.add_option("--ny", c.ny, "vertices down the slope")->check(CLI::Range(2, 4096))->capture_default_str();
   app.add_option("--spacing", c.spacing, "vertex spacing in metres")->check(CLI::Range(1e-4, 1.0))->capture_default_str();
+  app.add_option("--gap", c.gap,
+                 "m from the cloth's uphill edge down to the slope at the start; negative starts that edge inside")
+      ->check(CLI::Range(-1.0, 100.0))
+      ->capture_default_str();
   app.add_option("--method", method, "collision method")->check(CLI::IsMember({"faces", "vertices", "in-solve"}))->capture_default_str();
   app.add_option("--scalar", scalar, "floating-point type")->check(CLI::IsMember({"float", "double"}))->capture_default_str();
   app.add_flag("--json", json, "print one JSON object on stdout");
@@ -147,6 +151,7 @@ int main(int argc, char** argv) {
     j["method"] = method;
     j["angle_deg"] = c.angleDeg;
     j["friction"] = c.friction;
+    j["gap"] = c.gap;
     j["frames"] = c.frames;
     j["dt"] = c.dt;
     j["ms_per_frame"] = r.msPerFrame;
