@@ -1,6 +1,7 @@
 #pragma once
 // The inclined-plane scene of the SDF collision paper (Figs 5 and 8): a horizontal cloth above a slope falls, lands and
-// slides; or, started partly inside the slope, is pushed out of it. Shared by the sample, the tests and the benches, so all three measure the same thing.
+// slides; or, started partly inside the slope, is pushed out of it. Shared by the sample, the tests and the benches, so
+// all three measure the same thing.
 
 #include <drape/drape.hpp>
 

@@ -13,7 +13,7 @@ set terminal pngcairo size 1200,700 font "sans,11"
 set output out
 set datafile separator ","
 set datafile columnheaders
-set multiplot layout 1,2 title "Tracked vertex height above the slope (50x80 cloth started 5 cm into a 30 degree slope, 10 substeps)"
+set multiplot layout 1,2 title "Tracked vertex height (50x80 cloth started 5 cm into a 30 degree slope, 10 substeps)"
 set grid lc rgb "#dddddd"
 set key top right box opaque
 set xlabel "time (s)"

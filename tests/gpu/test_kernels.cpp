@@ -198,11 +198,11 @@ TEST_CASE("solve: the GPU kernel, one dispatch per colour, against solveDistance
   for (int p = 0; p < passes; ++p)
     for (int s = 0; s < 3; ++s) {
       if (withLambda)
-        drape::solveDistanceSet<true, float>(*sets[s], blocks[s], alphaTilde, lambdas[std::size_t(s)].data(), cpu.data(), w.data(),
-                                      drape::SimdLevel::Scalar);
+        drape::solveDistanceSet<true, float>(*sets[s], blocks[s], alphaTilde, lambdas[std::size_t(s)].data(),
+                                             cpu.data(), w.data(), drape::SimdLevel::Scalar);
       else
         drape::solveDistanceSet<false, float>(*sets[s], blocks[s], alphaTilde, nullptr, cpu.data(), w.data(),
-                                       drape::SimdLevel::Scalar);
+                                              drape::SimdLevel::Scalar);
     }
 
   // The GPU: all three sets in one buffer, a dispatch per colour.

@@ -392,12 +392,12 @@ template <Scalar S> bool applyPositionFriction(const ContactSlot<S>& c, Vec3<S>&
   return false;
 }
 
-/// The velocity split of the SDF collision paper (Fig 3) for every contact vertex of [begin, end) and each surface it touches, relative
-/// to that solid: the approaching normal velocity is removed, a separating one is damped by normalDamping, the
-/// tangential velocity is kept minus Coulomb friction. Friction acts on positions (applyPositionFriction); a
-/// stuck vertex keeps no tangential velocity, a sliding one loses dynamicFriction * dn / h of its tangential
-/// speed, the same as its position lost, so a slip never carries on as velocity what friction took from the
-/// position (that mismatch makes a stuck cloth crawl downhill in stick-slip waves). kFriction false (no solid
+/// The velocity split of the SDF collision paper (Fig 3) for every contact vertex of [begin, end) and each surface it
+/// touches, relative to that solid: the approaching normal velocity is removed, a separating one is damped by
+/// normalDamping, the tangential velocity is kept minus Coulomb friction. Friction acts on positions
+/// (applyPositionFriction); a stuck vertex keeps no tangential velocity, a sliding one loses dynamicFriction * dn / h
+/// of its tangential speed, the same as its position lost, so a slip never carries on as velocity what friction took
+/// from the position (that mismatch makes a stuck cloth crawl downhill in stick-slip waves). kFriction false (no solid
 /// of the scene has friction) compiles the friction out.
 template <bool kFriction, Scalar S>
 void respondContacts(Index begin, Index end, ContactBuffer<S>& contacts, Vec3<S>* x, const Vec3<S>* xPrev,
