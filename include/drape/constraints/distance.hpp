@@ -320,10 +320,9 @@ void solveDistanceColour(Index begin, Index end, Index c, const DistanceSet<S>& 
                          S alphaTilde, S* lambda, Vec4<S>* xw, const S* invMass, SimdLevel level) {
   if constexpr (std::is_same_v<S, float>) {
     [[maybe_unused]] constexpr Index kLanes = DistanceBlock<S>::kLanes;
-    [[maybe_unused]] const Index first = blocks.blockOffsets[c];
 #if DRAPE_AVX2
     if (level == SimdLevel::Avx2) {
-      const Index pairs = (blocks.blockOffsets[c + 1] - first) / 2;
+      const Index first = blocks.blockOffsets[c], pairs = (blocks.blockOffsets[c + 1] - first) / 2;
       detail::solveColourAvx2<kLambda>(begin, end, blocks.blocks.data(), first, pairs, blocks.massA.data(),
                                        blocks.massB.data(), alphaTilde, lambda, xw);
       return;
@@ -331,6 +330,7 @@ void solveDistanceColour(Index begin, Index end, Index c, const DistanceSet<S>& 
 #endif
 #if DRAPE_SSE2
     if (level == SimdLevel::Sse2) {
+      const Index first = blocks.blockOffsets[c];
       const __m128 alpha = _mm_set1_ps(alphaTilde);
       for (Index k = first + begin; k < first + end; ++k)
         detail::solveDistanceBlock<kLambda>(blocks.blocks[k], blocks.massA.data() + k * kLanes,
