@@ -81,6 +81,11 @@ template <> drape::Plane shapeFor() { return {}; }
 template <> drape::Sphere shapeFor() { return {0.3}; }
 template <> drape::Box shapeFor() { return {Eigen::Vector3d(0.3, 0.2, 0.1)}; }
 template <> drape::Capsule shapeFor() { return {0.05, 0.3}; }
+/// A ball of radius 0.3 m as a 64-cell grid field of an icosphere (5 mm cells beside 2 cm faces).
+template <> drape::MeshShape shapeFor() {
+  static const auto grid = drape::buildDistanceGrid(drape::makeIcosphere(0.3, 4), {64});
+  return {grid};
+}
 
 /// The deepest-point search on random 2 cm faces near the surface of each shape, or (cull) far from it.
 template <class Shape, class S, bool kFar> void faceQuery(benchmark::State& state) {
@@ -97,10 +102,35 @@ template <class Shape, class S, bool kFar> void faceQuery(benchmark::State& stat
     for (auto& p : f) p = (c + 0.02 * Eigen::Vector3d(u(rng), u(rng), u(rng))).cast<S>();
   }
   drape::FaceQuery<S> q;
+  long long evaluations = 0;
   for (auto _ : state)
     for (const auto& f : faces) {
       benchmark::DoNotOptimize(drape::queryFace<true>(sdf, f[0], f[1], f[2], S(0.005), 12, q));
       benchmark::DoNotOptimize(q);
+      evaluations += q.evaluations;
+    }
+  perItem(state, kFaces);
+  state.counters["evaluations"] = benchmark::Counter(double(evaluations) / double(kFaces * state.iterations()));
+}
+
+/// The projected gradient descent (descendOnFace) on the same faces of the meshed ball, uncertified, for
+/// comparison with the branch and bound that queryFace runs on grid fields.
+template <class S> void faceDescent(benchmark::State& state) {
+  const auto sdf = drape::detail::compileSdf<S>(shapeFor<drape::MeshShape>(), drape::Pose{}, Eigen::Vector3d::Zero());
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1, 1);
+  constexpr int kFaces = 1024;
+  std::vector<std::array<drape::Vec3<S>, 3>> faces(kFaces);
+  for (auto& f : faces) {
+    const Eigen::Vector3d c = Eigen::Vector3d(u(rng), u(rng), u(rng)).normalized() * 0.3;
+    for (auto& p : f) p = (c + 0.02 * Eigen::Vector3d(u(rng), u(rng), u(rng))).cast<S>();
+  }
+  for (auto _ : state)
+    for (const auto& f : faces) {
+      const drape::FaceSphere<S> sphere = drape::faceSphere<S>(f[0], f[1], f[2]);
+      drape::Vec3<S> g;
+      const S phi = sdf(sphere.centre, g);
+      benchmark::DoNotOptimize(drape::descendOnFace<S>(sdf, f[0], f[1], f[2], sphere.centre, phi, g, 12));
     }
   perItem(state, kFaces);
 }
@@ -150,6 +180,10 @@ BENCHMARK(faceQuery<drape::Box, float, false>);
 BENCHMARK(faceQuery<drape::Capsule, float, false>);
 BENCHMARK(faceQuery<drape::Sphere, float, true>);  // culled
 BENCHMARK(faceQuery<drape::Sphere, double, false>);
+BENCHMARK(faceQuery<drape::MeshShape, float, false>);
+BENCHMARK(faceQuery<drape::MeshShape, double, false>);
+BENCHMARK(faceQuery<drape::MeshShape, float, true>);  // culled
+BENCHMARK(faceDescent<float>);
 BENCHMARK(respondAndPropagate<float, false>)->ArgName("propagate")->DenseRange(0, 1);
 BENCHMARK(respondAndPropagate<float, true>)->ArgName("propagate")->Arg(0);
 

@@ -166,7 +166,8 @@ void main() {
   }
 #else
   // Projected gradient descent over the barycentric simplex (the CPU twin: descendOnFace), for a field that may
-  // not be convex: Barzilai-Borwein step lengths, halved when a step does not lower phi.
+  // not be convex: Barzilai-Borwein step lengths, halved when a step does not lower phi. The CPU searches grid
+  // fields by branch and bound (include/drape/sdf/grid_search.hpp), which is not yet ported here.
   const float kMinStep = DRAPE_MIN_DESCENT_STEP;
   vec3 slope = slopeAt(gradC, x0, x1, x2);
   const float slopeLen = length3(slope);

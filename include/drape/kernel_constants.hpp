@@ -31,6 +31,14 @@ inline constexpr double kFaceSearchGap = 3e-4;
 inline constexpr double kCutSlack = 0.01;
 /// Projected gradient descent stops when a step moves every barycentric coordinate less than this.
 inline constexpr double kMinDescentStep = 1e-3;
+/// The face search on grid fields splits a face at most this many times (sub-triangles 1/4096 of its size)...
+inline constexpr int kGridSearchDepth = 12;
+/// ... and reads at most about this many cells (eight nodes each) per face.
+inline constexpr int kGridSearchBudget = 512;
+/// A Lipschitz constant of a grid field everywhere: inside the grid each partial derivative is an average of
+/// node differences, at most 1 in size (sqrt(3) in all), and outside it sqrt(e^2 + g^2) or g + e adds the
+/// box distance's 1; rounded up past the nodes' float rounding.
+inline constexpr double kGridLipschitz = 2.75;
 
 // Several solids meeting (docs/design.md §16).
 /// Extra vertex passes on the true fields where solids meet.

@@ -197,7 +197,9 @@ FaceQuery<S> descendOnFace(const Field& sdf, const Vec3<S>& x0, const Vec3<S>& x
 }
 
 /// One face against one field: the bounding-sphere cull (when kCull) and, if the face may come within margin,
-/// its deepest point. Returns false when culled. Shared by the solver's face pass and the penetration metric.
+/// its deepest point: cutting planes on a convex field, a field's own search where it has one (a grid's branch
+/// and bound, which spends up to kGridSearchBudget cell reads rather than maxIterations), the descent otherwise.
+/// Returns false when culled. Shared by the solver's face pass and the penetration metric.
 template <bool kCull, Scalar S, class Field>
 bool queryFace(const Field& sdf, const Vec3<S>& x0, const Vec3<S>& x1, const Vec3<S>& x2, S margin,
                int maxIterations, FaceQuery<S>& q) {
@@ -209,11 +211,19 @@ bool queryFace(const Field& sdf, const Vec3<S>& x0, const Vec3<S>& x1, const Vec
   Vec3<S> gradC;
   const S phiC = sdf(sphere.centre, gradC);
   if constexpr (kCull) {
-    if (phiC > sphere.radius + margin) return false;
+    // A field steeper than a true distance (a grid's) states how much: the sphere test scales by it.
+    if constexpr (requires { Field::kLipschitz; }) {
+      if (phiC > S(Field::kLipschitz) * sphere.radius + margin) return false;
+    } else if (phiC > sphere.radius + margin) {
+      return false;
+    }
   }
-  if constexpr (Field::kConvex)  // with culling, the tangent planes cull too
-    q = deepestPointOnFace<S>(sdf, x0, x1, x2, sphere.centre, phiC, gradC, maxIterations,
-                              kCull ? margin : std::numeric_limits<S>::infinity());
+  // With culling, the search's own bounds cull too.
+  const S floor = kCull ? margin : std::numeric_limits<S>::infinity();
+  if constexpr (Field::kConvex)
+    q = deepestPointOnFace<S>(sdf, x0, x1, x2, sphere.centre, phiC, gradC, maxIterations, floor);
+  else if constexpr (requires { sdf.deepestPointOnFace(x0, x1, x2, x0, phiC, gradC, maxIterations, floor); })
+    q = sdf.deepestPointOnFace(x0, x1, x2, sphere.centre, phiC, gradC, constants::kGridSearchBudget, floor);
   else
     q = descendOnFace<S>(sdf, x0, x1, x2, sphere.centre, phiC, gradC, maxIterations);
   return true;

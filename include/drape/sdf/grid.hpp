@@ -19,6 +19,7 @@
 // The returned gradient is the trilinearly interpolated node normal, normalised (smooth and exact at the
 // nodes, where the gradient of the trilinear field would be a piecewise-bilinear, non-unit approximation).
 
+#include <drape/sdf/grid_search.hpp>
 #include <drape/sdf/mesh.hpp>
 #include <drape/sdf/shapes.hpp>
 
@@ -360,6 +361,43 @@ struct GridSampler {
     gradient = Vec3<S>(g[0], g[1], g[2]);
     return phi;
   }
+
+  /// The distance alone at u, a point in cells from node (0, 0, 0): the value operator() gives, with the same
+  /// arithmetic on the distances. For the face search (grid_search.hpp), which needs no gradient until the end.
+  S distanceAt(const Vec3<S>& u) const {
+    std::array<Index, 3> cell;
+    S t[3], excess2 = 0;
+    for (int a = 0; a < 3; ++a) {
+      const S c = std::clamp(u[a], S(0), S(count[a] - 1));
+      const S beyond = (u[a] - c) * cellSize;
+      excess2 += beyond * beyond;
+      cell[a] = std::min(Index(c), count[a] - 2);
+      t[a] = c - S(cell[a]);
+    }
+    const std::size_t sx = 1, sy = std::size_t(count[0]), sz = sy * std::size_t(count[1]);
+    const Eigen::Vector4f* n0 = nodes + (std::size_t(cell[2]) * sz + std::size_t(cell[1]) * sy + std::size_t(cell[0]));
+    auto at = [&](std::size_t offset) { return S(n0[offset][3]); };
+    const S c00 = at(0) + t[0] * (at(sx) - at(0));
+    const S c10 = at(sy) + t[0] * (at(sy + sx) - at(sy));
+    const S c01 = at(sz) + t[0] * (at(sz + sx) - at(sz));
+    const S c11 = at(sz + sy) + t[0] * (at(sz + sy + sx) - at(sz + sy));
+    const S c0 = c00 + t[1] * (c10 - c00);
+    const S c1 = c01 + t[1] * (c11 - c01);
+    const S g = c0 + t[2] * (c1 - c0);
+    if (excess2 == S(0)) return g;
+    const S e = std::sqrt(excess2);
+    return g > S(0) ? std::sqrt(e * e + g * g) : g + e;
+  }
+
+  /// The trilinear polynomial of one cell (node `cell` its lowest corner), expanded about t (in cells from that
+  /// node, anywhere: the polynomial extends beyond its cell). The expansion is exact (see CellPolynomial).
+  CellPolynomial<S> expand(const std::array<Index, 3>& cell, const Vec3<S>& t) const {
+    const std::size_t sx = 1, sy = std::size_t(count[0]), sz = sy * std::size_t(count[1]);
+    const Eigen::Vector4f* n0 = nodes + (std::size_t(cell[2]) * sz + std::size_t(cell[1]) * sy + std::size_t(cell[0]));
+    S v[8];  // v[i + 2j + 4k]: node (i, j, k) of the cell
+    for (int k = 0; k < 8; ++k) v[k] = S(n0[(k & 1 ? sx : 0) + (k & 2 ? sy : 0) + (k & 4 ? sz : 0)][3]);
+    return CellPolynomial<S>::expand(v, t);
+  }
 };
 
 }  // namespace detail
@@ -441,6 +479,7 @@ template <Scalar S>
 struct Sdf<MeshShape, S> {
   static constexpr bool kLinear = false;
   static constexpr bool kConvex = false;  ///< the mesh may be non-convex: a face search cannot assume one minimum
+  static constexpr double kLipschitz = constants::kGridLipschitz;  ///< for the face cull (queryFace)
   using V4 = Eigen::Matrix<S, 4, 1>;
   using M4 = Eigen::Matrix<S, 4, 4>;
   std::shared_ptr<const DistanceGrid> grid;  ///< keeps the nodes that `sample` reads alive
@@ -455,6 +494,33 @@ struct Sdf<MeshShape, S> {
     const V4 world = toLocal.transpose() * g;
     gradient = Vec3<S>(world[0], world[1], world[2]);
     return phi;
+  }
+
+  /// Where x lies in the grid, in cells from node (0, 0, 0).
+  Vec3<S> toCells(const Vec3<S>& x) const {
+    const V4 u = (toLocal * (V4(x.x(), x.y(), x.z(), S(0)) - centre) - sample.lower) * sample.invCellSize;
+    return Vec3<S>(u[0], u[1], u[2]);
+  }
+
+  /// The deepest point of a face (queryFace's search for this field): branch and bound over the face
+  /// (detail::branchAndBoundOnFace), from the centroid's value phiC and gradient gradC, to within
+  /// kFaceSearchGap face lengths of the field's minimum, at most about `budget` cell reads; the search drops
+  /// what clears `floor`. The best point is evaluated once more for its gradient (counted).
+  FaceQuery<S> deepestPointOnFace(const Vec3<S>& x0, const Vec3<S>& x1, const Vec3<S>& x2, const Vec3<S>& centroid,
+                                  S phiC, const Vec3<S>& gradC, int budget, S floor) const {
+    const S extent = std::max({(x1 - x0).norm(), (x2 - x0).norm(), (x2 - x1).norm()});
+    const Vec3<S> u[3] = {toCells(x0), toCells(x1), toCells(x2)};
+    FaceQuery<S> q{Vec3<S>::Constant(S(1) / S(3)), centroid, gradC, phiC, 1};
+    S value;
+    const Vec3<S> b = detail::branchAndBoundOnFace<S>(sample, u, phiC, S(constants::kFaceSearchGap) * extent, floor,
+                                                      budget, value, q.evaluations);
+    if (value < phiC) {
+      q.barycentric = b.cwiseMax(S(0)) / b.cwiseMax(S(0)).sum();  // b0 = 1 - b1 - b2 may round below zero
+      q.point = b[0] * x0 + b[1] * x1 + b[2] * x2;
+      q.phi = (*this)(q.point, q.normal);
+      ++q.evaluations;
+    }
+    return q;
   }
 };
 
