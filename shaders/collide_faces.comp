@@ -1,12 +1,13 @@
 // docs/design.md §3 and §4, the face pass (the CPU twins: queryFace and deepestPointOnFace in
-// include/drape/collision/pgd.hpp, projectFaceContactsAs in include/drape/collision/response.hpp), for one colour
-// of faces: faces of a colour share no vertex, so each invocation moves its own three vertices. Per face: the
-// bounding-sphere cull (phi at the centroid beyond the radius plus the thickness), then Kelley's cutting-plane
-// search for the deepest point (the field of a convex solid is convex along the face, so each tangent plane
-// bounds it from below and the search stops once the best value is certified), and where that point is closer
-// than the thickness, the face's vertices move along the normal, weighted by barycentric weight and inverse
-// mass, to carry it to the thickness. The moves are recorded in the vertices' contacts (recordContact, as the
-// CPU records them).
+// include/drape/collision/pgd.hpp, branchAndBoundOnFace in include/drape/sdf/grid_search.hpp,
+// projectFaceContactsAs in include/drape/collision/response.hpp), for one colour of faces: faces of a colour
+// share no vertex, so each invocation moves its own three vertices. Per face: the bounding-sphere cull (phi at the
+// centroid beyond the radius, times a grid field's Lipschitz constant, plus the thickness), then the search for
+// the deepest point: on a convex solid Kelley's cutting planes (each tangent plane bounds the field from below
+// along the face, so the search stops once the best value is certified), on a grid field branch and bound with
+// bounds from the cells' trilinear polynomials. Where that point is closer than the thickness, the face's
+// vertices move along the normal, weighted by barycentric weight and inverse mass, to carry it to the thickness.
+// The moves are recorded in the vertices' contacts (recordContact, as the CPU records them).
 //
 // The CPU visits every face in index order; here the colours go in turn and the faces of one colour at once,
 // which is another order of the same Gauss-Seidel pass: a colour's faces on their own give the CPU's bits.
@@ -47,31 +48,198 @@ vec3 cutAt(vec3 b, float phi, vec3 n, vec3 e1, vec3 e2) {
   return c;
 }
 
-// The field's slope in barycentric coordinates, within the simplex's plane: g - mean(g), g = (n . x0, n . x1, n . x2).
-vec3 slopeAt(vec3 n, vec3 x0, vec3 x1, vec3 x2) {
-  const vec3 g = vec3(dot3(n, x0), dot3(n, x1), dot3(n, x2));
-  precise const float mean = (g.x + (g.y + g.z)) / 3.0;
-  precise const vec3 s = g - vec3(mean);
-  return s;
+#if !DRAPE_CONVEX
+// The face search on a grid field (the CPU twins in include/drape/sdf/grid_search.hpp): branch and bound over
+// the face's triangle, bounded by each cell's trilinear polynomial over the triangle's part in the cell.
+const int kGridDepth = DRAPE_GRID_SEARCH_DEPTH;
+const int kGridStack = 3 * kGridDepth + 4;
+const int kPolyMost = 9;  // Polygon::kMost
+vec3 partCuts[6];         // half-planes h0 + ha alpha + hb beta >= 0, as (h0, ha, hb)
+float polyA[kPolyMost + 1], polyB[kPolyMost + 1];
+int polyCorners;
+vec4 gridStack[kGridStack];  // sub-triangles (o1, o2, s, lower)
+
+float infinity() { return uintBitsToFloat(0x7F800000u); }
+
+// Polygon's constructor: the triangle (alpha, beta) >= 0, alpha + beta <= 1, clipped by each cut.
+void clipTriangle(int cutCount) {
+  polyA[0] = 0.0, polyB[0] = 0.0, polyA[1] = 1.0, polyB[1] = 0.0, polyA[2] = 0.0, polyB[2] = 1.0;
+  polyCorners = 3;
+  for (int k = 0; k < cutCount && polyCorners > 0; ++k) {
+    const vec3 h = partCuts[k];
+    float qa[kPolyMost + 1], qb[kPolyMost + 1];
+    int outCount = 0;
+    for (int i = 0; i < polyCorners && outCount + 2 <= kPolyMost + 1; ++i) {
+      const int j = i + 1 == polyCorners ? 0 : i + 1;
+      precise const float si = (h.x + h.y * polyA[i]) + h.z * polyB[i];
+      precise const float sj = (h.x + h.y * polyA[j]) + h.z * polyB[j];
+      if (si >= 0.0) qa[outCount] = polyA[i], qb[outCount] = polyB[i], ++outCount;
+      if ((si >= 0.0) != (sj >= 0.0)) {
+        precise const float t = si / (si - sj);
+        precise const float na = polyA[i] + t * (polyA[j] - polyA[i]);
+        precise const float nb = polyB[i] + t * (polyB[j] - polyB[i]);
+        qa[outCount] = na, qb[outCount] = nb, ++outCount;
+      }
+    }
+    polyCorners = outCount;
+    for (int i = 0; i < outCount; ++i) polyA[i] = qa[i], polyB[i] = qb[i];
+  }
 }
 
-// Euclidean projection onto {b : b >= 0, b0 + b1 + b2 = 1} (projectToSimplex): sorted descending, the largest
-// threshold that keeps a coordinate positive.
-vec3 projectToSimplex(vec3 y) {
-  float u0 = y.x, u1 = y.y, u2 = y.z, tmp;
-  if (u1 > u0) tmp = u0, u0 = u1, u1 = tmp;
-  if (u2 > u1) tmp = u1, u1 = u2, u2 = tmp;
-  if (u1 > u0) tmp = u0, u0 = u1, u1 = tmp;
-  const float u[3] = float[3](u0, u1, u2);
-  precise float sum = 0.0;
-  float theta = 0.0;
-  for (int j = 0; j < 3; ++j) {
-    sum = sum + u[j];
-    precise const float t = (sum - 1.0) / float(j + 1);
-    if (u[j] - t > 0.0) theta = t;
-  }
-  return max(y - vec3(theta), vec3(0.0));
+vec3 hessianTimes(CellPolynomial p, vec3 v) {
+  precise const vec3 r = vec3(p.xy * v.y + p.xz * v.z, p.xy * v.x + p.yz * v.z, p.xz * v.x + p.yz * v.y);
+  return r;
 }
+
+// lowestOfQuadratic over the polygon clipTriangle left (cut by partCuts[0, cutCount)).
+float lowestOfQuadratic(CellPolynomial p, vec3 d0, vec3 d1, vec3 d2, int cutCount, out float alpha, out float beta) {
+  precise const vec3 e1 = d1 - d0, e2 = d2 - d0;
+  const vec3 h0 = hessianTimes(p, d0), h1 = hessianTimes(p, e1), h2 = hessianTimes(p, e2);
+  precise const float f0 = (p.value + dot3(p.slope, d0)) + 0.5 * dot3(d0, h0);
+  precise const vec3 g0 = p.slope + h0;
+  const float gp = dot3(g0, e1), gq = dot3(g0, e2);
+  const float a = dot3(e1, h1), b = dot3(e1, h2), c = dot3(e2, h2);
+  float best = infinity();
+  alpha = 0.0, beta = 0.0;
+  for (int i = 0; i < polyCorners; ++i) {
+    const float al = polyA[i], be = polyB[i];
+    precise const float v = ((f0 + gp * al) + gq * be) + 0.5 * ((a * al * al + 2.0 * b * al * be) + c * be * be);
+    if (v < best) best = v, alpha = al, beta = be;
+    const int j = i + 1 == polyCorners ? 0 : i + 1;
+    precise const float da = polyA[j] - al, db = polyB[j] - be;
+    precise const float slope = (gp + a * al + b * be) * da + (gq + b * al + c * be) * db;
+    precise const float curve = (a * da * da + 2.0 * b * da * db) + c * db * db;
+    if (curve > 0.0 && -slope > 0.0 && -slope < curve) {
+      precise const float t = -slope / curve;
+      precise const float ta = al + t * da, tb = be + t * db;
+      precise const float tv = ((f0 + gp * ta) + gq * tb) + 0.5 * ((a * ta * ta + 2.0 * b * ta * tb) + c * tb * tb);
+      if (tv < best) best = tv, alpha = ta, beta = tb;
+    }
+  }
+  precise const float det = a * c - b * b;
+  if (a > 0.0 && det > 0.0) {
+    precise const float al = (b * gq - c * gp) / det, be = (b * gp - a * gq) / det;
+    bool inside = al > 0.0 && be > 0.0 && al + be < 1.0;
+    for (int k = 0; k < cutCount && inside; ++k) {
+      precise const float side = (partCuts[k].x + partCuts[k].y * al) + partCuts[k].z * be;
+      inside = side >= 0.0;
+    }
+    precise const float v = f0 + 0.5 * (gp * al + gq * be);
+    if (inside && v < best) best = v, alpha = al, beta = be;
+  }
+  return best;
+}
+
+// boundOnTriangle: a lower bound of the field over the triangle u0, u1, u2 (in cells), the place to try next as
+// corner weights, and the centroid's value when it comes free (infinity otherwise).
+float boundOnTriangle(vec3 u0, vec3 u1, vec3 u2, out vec3 at, out float middleValue, inout int evaluations) {
+  const ivec3 count = gridCount();
+  const float cellSize = gridCellSize();
+  precise const vec3 c = ((u0 + u1) + u2) / 3.0;
+  precise const vec3 d0 = u0 - c, d1 = u1 - c, d2 = u2 - c;
+  const vec3 lo = min(min(u0, u1), u2), hi = max(max(u0, u1), u2);
+  const int kSlabs = 4;
+  ivec2 slabs[3][kSlabs];  // (cell, side)
+  float splits[3][kSlabs];
+  int slabCount[3] = int[3](0, 0, 0);
+  bool local = true, outside = false;
+  for (int a = 0; a < 3 && local; ++a) {
+    const int topCell = count[a] - 2;
+    const float top = float(count[a] - 1);
+    int n = 0;
+    if (lo[a] < 0.0) slabs[a][n] = ivec2(0, -1), splits[a][n] = 0.0, ++n;
+    if (hi[a] >= 0.0 && lo[a] <= top) {
+      const int first = min(int(max(lo[a], 0.0)), topCell), last = min(int(min(hi[a], top)), topCell);
+      local = last - first + 1 + n <= kSlabs;
+      for (int k = first; k <= last && local; ++k) slabs[a][n] = ivec2(k, 0), splits[a][n] = float(k + 1), ++n;
+    }
+    if (hi[a] > top && local) {
+      local = n < kSlabs;
+      if (local) slabs[a][n] = ivec2(topCell, 1), ++n;
+    }
+    slabCount[a] = n;
+    if (local) outside = outside || slabs[a][0].y != 0 || slabs[a][n - 1].y != 0;
+  }
+  at = vec3(1.0 / 3.0);
+  middleValue = infinity();
+  if (!local) {
+    middleValue = gridDistanceAt(c);
+    ++evaluations;
+    const float reach = sqrt(max(max(dot3(d0, d0), dot3(d1, d1)), dot3(d2, d2))) * cellSize;
+    precise const float bound = middleValue - DRAPE_GRID_LIPSCHITZ * reach;
+    return bound;
+  }
+  if (outside) {
+    middleValue = gridDistanceAt(c);
+    ++evaluations;
+  }
+  ivec3 home;
+  for (int a = 0; a < 3; ++a) home[a] = min(int(max(c[a], 0.0)), count[a] - 2);
+  const vec3 extent = max(max(abs(d0), abs(d1)), abs(d2));
+  precise const float cube = extent.x * extent.y * extent.z;
+  precise const vec3 e1 = u1 - u0, e2 = u2 - u0;
+  float lowest = infinity();
+  for (int i2 = 0; i2 < slabCount[2]; ++i2)
+    for (int i1 = 0; i1 < slabCount[1]; ++i1)
+      for (int i0 = 0; i0 < slabCount[0]; ++i0) {
+        const ivec2 piece[3] = ivec2[3](slabs[0][i0], slabs[1][i1], slabs[2][i2]);
+        const int index[3] = int[3](i0, i1, i2);
+        const ivec3 cell = ivec3(piece[0].x, piece[1].x, piece[2].x);
+        int cutCount = 0;
+        for (int a = 0; a < 3; ++a) {
+          if (index[a] > 0) partCuts[cutCount++] = vec3(u0[a] - splits[a][index[a] - 1], e1[a], e2[a]);
+          if (index[a] + 1 < slabCount[a]) partCuts[cutCount++] = vec3(splits[a][index[a]] - u0[a], -e1[a], -e2[a]);
+        }
+        clipTriangle(cutCount);
+        if (polyCorners == 0) continue;
+        vec3 t, w = vec3(0.0);
+        bool clamped = false;
+        for (int a = 0; a < 3; ++a) {
+          const int side = piece[a].y;
+          t[a] = side == 0 ? c[a] - float(cell[a]) : (side < 0 ? 0.0 : 1.0);
+          if (side != 0) w[a] = side < 0 ? c[a] : c[a] - float(count[a] - 1), clamped = true;
+        }
+        CellPolynomial p = gridExpand(cell, t);
+        ++evaluations;
+        if (clamped) {
+          for (int k = 0; k < 8; ++k) {
+            bool onFace = true;
+            for (int a = 0; a < 3; ++a)
+              if (piece[a].y != 0) onFace = onFace && (((k >> a) & 1) == (piece[a].y > 0 ? 1 : 0));
+            if (onFace && !(p.node[k] >= 0.0)) {  // the box cuts the solid: the Lipschitz bound
+              if (!outside) middleValue = gridDistanceAt(c), ++evaluations;
+              const float reach = sqrt(max(max(dot3(d0, d0), dot3(d1, d1)), dot3(d2, d2))) * cellSize;
+              precise const float bound = middleValue - DRAPE_GRID_LIPSCHITZ * reach;
+              at = vec3(1.0 / 3.0);
+              return bound;
+            }
+          }
+          const float reach = length3(w);
+          precise const float away = reach * cellSize;
+          const float norm = sqrt(away * away + p.value * p.value);
+          const float al = away / norm, be = p.value / norm;
+          p.value = norm;
+          for (int a = 0; a < 3; ++a) {
+            precise const float clampedSlope = reach > 0.0 ? al * cellSize * w[a] / reach : 0.0;
+            precise const float freeSlope = be * p.slope[a];
+            p.slope[a] = piece[a].y != 0 ? clampedSlope : freeSlope;
+          }
+          p.xy = piece[0].y != 0 || piece[1].y != 0 ? 0.0 : be * p.xy;
+          p.xz = piece[0].y != 0 || piece[2].y != 0 ? 0.0 : be * p.xz;
+          p.yz = piece[1].y != 0 || piece[2].y != 0 ? 0.0 : be * p.yz;
+          p.xyz = 0.0;
+          p.lowestNode = -infinity();
+        } else if (!outside && cell == home) {
+          middleValue = p.value;
+        }
+        float al, be;
+        const float quadratic = lowestOfQuadratic(p, d0, d1, d2, cutCount, al, be);
+        precise const float bound = max(quadratic - abs(p.xyz) * cube, p.lowestNode);
+        if (bound < lowest) lowest = bound, at = vec3((1.0 - al) - be, al, be);
+      }
+  return lowest;
+}
+#endif
 
 void main() {
   if (gl_GlobalInvocationID.x >= count) return;
@@ -89,7 +257,11 @@ void main() {
   const float radius = sqrt(r2);
   vec3 gradC;
   const float phiC = sdf(middle, gradC);
+#if DRAPE_CONVEX
   if (phiC > radius + thickness) return;
+#else
+  if (phiC > DRAPE_GRID_LIPSCHITZ * radius + thickness) return;  // a grid field is steeper than a distance
+#endif
 
   vec3 qb = vec3(1.0 / 3.0), qn = gradC, qp = middle;
   float qphi = phiC;
@@ -165,31 +337,77 @@ void main() {
     if (exact) lower = max(lower, model);
   }
 #else
-  // Projected gradient descent over the barycentric simplex (the CPU twin: descendOnFace), for a field that may
-  // not be convex: Barzilai-Borwein step lengths, halved when a step does not lower phi. The CPU searches grid
-  // fields by branch and bound (include/drape/sdf/grid_search.hpp), which is not yet ported here.
-  const float kMinStep = DRAPE_MIN_DESCENT_STEP;
-  vec3 slope = slopeAt(gradC, x0, x1, x2);
-  const float slopeLen = length3(slope);
-  float alpha = slopeLen > 0.0 ? 1.0 / slopeLen : 0.0;  // the first trial moves one unit
-  while (evaluations < maxIterations && alpha > 0.0) {
-    precise const vec3 bb = projectToSimplex(qb - alpha * slope);
-    precise const vec3 stepB = bb - qb;
-    if (max(max(abs(stepB.x), abs(stepB.y)), abs(stepB.z)) < kMinStep) break;
-    precise const vec3 p = (x0 + bb.y * e1) + bb.z * e2;
-    vec3 n;
-    const float phi = sdf(p, n);
-    ++evaluations;
-    if (phi < qphi) {
-      const vec3 next = slopeAt(n, x0, x1, x2);
-      precise const float sy = dot3(stepB, next - slope);
-      precise const float bbStep = dot3(stepB, stepB) / sy;
-      alpha = sy > 0.0 ? bbStep : 2.0 * alpha;
-      slope = next;
-      qb = bb, qn = n, qphi = phi, qp = p;
+  // Branch and bound over the face (branchAndBoundOnFace and Sdf<MeshShape>::deepestPointOnFace) with
+  // floor = thickness: sub-triangles split in four, depth first, lowest bound first.
+  const vec3 u0 = gridCells(x0), u1 = gridCells(x1), u2 = gridCells(x2);
+  const float extent = max(max(length3(x1 - x0), length3(x2 - x0)), length3(x2 - x1));
+  precise const float tolerance = DRAPE_FACE_SEARCH_GAP * extent;
+  precise const float stopAt = thickness + tolerance;
+  precise const vec3 ue1 = u1 - u0, ue2 = u2 - u0;
+  float value = phiC;
+  vec3 best = vec3(1.0 / 3.0);
+  int top = 0;
+  const float smallest = ldexp(1.0, -kGridDepth);
+  // visit(o1, o2, s): bound one sub-triangle and try its points; the root first.
+  for (int pass = 0; ; ++pass) {
+    vec4 children[4];
+    int childCount;
+    if (pass == 0) {
+      children[0] = vec4(0.0, 0.0, 1.0, 0.0);
+      childCount = 1;
     } else {
-      alpha *= 0.5;
+      if (top == 0 || evaluations >= DRAPE_GRID_SEARCH_BUDGET) break;
+      const vec4 n = gridStack[--top];
+      precise const float keepBelow = min(value - tolerance, stopAt);
+      if (n.w >= keepBelow || abs(n.z) <= smallest) continue;
+      precise const float h = n.z / 2.0;
+      precise const float o1h = n.x + h, o2h = n.y + h;
+      children[0] = vec4(n.x, n.y, h, 0.0);
+      children[1] = vec4(o1h, n.y, h, 0.0);
+      children[2] = vec4(n.x, o2h, h, 0.0);
+      children[3] = vec4(o1h, o2h, -h, 0.0);
+      childCount = 4;
     }
+    for (int k = 0; k < childCount; ++k) {
+      const float o1 = children[k].x, o2 = children[k].y, sz = children[k].z;
+      precise const vec3 c0 = (u0 + o1 * ue1) + o2 * ue2;
+      precise const vec3 c1 = (u0 + (o1 + sz) * ue1) + o2 * ue2;
+      precise const vec3 c2 = (u0 + o1 * ue1) + (o2 + sz) * ue2;
+      vec3 at;
+      float middleValue;
+      const float lower = boundOnTriangle(c0, c1, c2, at, middleValue, evaluations);
+      if (middleValue < value) {
+        precise const vec3 cb = vec3((1.0 - o1 - o2) - 2.0 * sz / 3.0, o1 + sz / 3.0, o2 + sz / 3.0);
+        value = middleValue, best = cb;
+      }
+      if (lower < min(value - tolerance, stopAt)) {
+        precise const float b1 = o1 + sz * at.y, b2 = o2 + sz * at.z;
+        precise const vec3 tryAt = (u0 + b1 * ue1) + b2 * ue2;
+        const float phi = gridDistanceAt(tryAt);
+        ++evaluations;
+        if (phi < value) value = phi, best = vec3((1.0 - b1) - b2, b1, b2);
+      }
+      children[k].w = lower;
+    }
+    // Stable insertion sort, highest bound first, so the lowest is taken next.
+    for (int i = 1; i < childCount; ++i) {
+      const vec4 key = children[i];
+      int j = i - 1;
+      while (j >= 0 && key.w > children[j].w) children[j + 1] = children[j], --j;
+      children[j + 1] = key;
+    }
+    precise const float keep = min(value - tolerance, stopAt);
+    for (int k = 0; k < childCount; ++k)
+      if (children[k].w < keep && top < kGridStack) gridStack[top++] = children[k];
+  }
+  if (value < phiC) {
+    const vec3 clampedB = max(best, vec3(0.0));
+    precise const vec3 nb = clampedB / (clampedB.x + (clampedB.y + clampedB.z));
+    precise const vec3 p = (nb.x * x0 + nb.y * x1) + nb.z * x2;
+    vec3 n;
+    qphi = sdf(p, n);
+    qb = nb, qn = n, qp = p;
+    ++evaluations;
   }
 #endif
   if (qphi >= thickness) return;

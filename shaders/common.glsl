@@ -373,6 +373,89 @@ float sdf(vec3 x, out vec3 gradient) {
   gradient = rotateBack(r0, r1, r2, glen > 0.0 ? grad / glen : excess / e);
   return phi;
 }
+
+// The face search's view of the grid (the CPU twins: Sdf<MeshShape>::toCells, GridSampler::distanceAt and
+// GridSampler::expand with CellPolynomial::expand in include/drape/sdf/grid_search.hpp).
+ivec3 gridCount() { return ivec3(shape[4].yzw); }
+float gridCellSize() { return shape[0].w; }
+
+// Where x lies in the grid, in cells from node (0, 0, 0).
+vec3 gridCells(vec3 x) {
+  const vec3 lower = vec3(shape[1].w, shape[2].w, shape[3].w);
+  precise const vec3 q = rotate(shape[1].xyz, shape[2].xyz, shape[3].xyz, x - shape[0].xyz);
+  precise const vec3 u = (q - lower) * shape[4].x;
+  return u;
+}
+
+// The distance alone at u (in cells): sdf()'s value without the gradient.
+float gridDistanceAt(vec3 u) {
+  const ivec3 count = gridCount();
+  const float cellSize = gridCellSize();
+  ivec3 cell;
+  vec3 t;
+  precise float excess2 = 0.0;
+  for (int a = 0; a < 3; ++a) {
+    const float c = clamp(u[a], 0.0, float(count[a] - 1));
+    precise const float beyond = (u[a] - c) * cellSize;
+    excess2 = excess2 + beyond * beyond;
+    cell[a] = min(int(c), count[a] - 2);
+    t[a] = c - float(cell[a]);
+  }
+  const int sy = count.x, sz = count.x * count.y;
+  const int n0 = cell.z * sz + cell.y * sy + cell.x;
+  precise const float c00 = nodes[n0].w + t.x * (nodes[n0 + 1].w - nodes[n0].w);
+  precise const float c10 = nodes[n0 + sy].w + t.x * (nodes[n0 + sy + 1].w - nodes[n0 + sy].w);
+  precise const float c01 = nodes[n0 + sz].w + t.x * (nodes[n0 + sz + 1].w - nodes[n0 + sz].w);
+  precise const float c11 = nodes[n0 + sz + sy].w + t.x * (nodes[n0 + sz + sy + 1].w - nodes[n0 + sz + sy].w);
+  precise const float c0 = c00 + t.y * (c10 - c00);
+  precise const float c1 = c01 + t.y * (c11 - c01);
+  precise const float g = c0 + t.z * (c1 - c0);
+  if (excess2 == 0.0) return g;
+  const float e = sqrt(excess2);
+  precise const float outside = g > 0.0 ? sqrt(e * e + g * g) : g + e;
+  return outside;
+}
+
+// A cell's trilinear polynomial expanded about t (in cells from its lowest node): value + slope . d + xy dx dy +
+// xz dx dz + yz dy dz + xyz dx dy dz, exactly; its nodes v[i + 2j + 4k].
+struct CellPolynomial {
+  float value;
+  vec3 slope;
+  float xy, xz, yz, xyz;
+  float lowestNode;
+  float node[8];
+};
+
+CellPolynomial gridExpand(ivec3 cell, vec3 t) {
+  const ivec3 count = gridCount();
+  const int sy = count.x, sz = count.x * count.y;
+  const int n0 = cell.z * sz + cell.y * sy + cell.x;
+  CellPolynomial p;
+  for (int k = 0; k < 8; ++k) p.node[k] = nodes[n0 + ((k & 1) != 0 ? 1 : 0) + ((k & 2) != 0 ? sy : 0) + ((k & 4) != 0 ? sz : 0)].w;
+  float ax[4], dx[4];
+  for (int jk = 0; jk < 4; ++jk) {
+    precise const float dd = p.node[2 * jk + 1] - p.node[2 * jk];
+    precise const float aa = p.node[2 * jk] + t.x * dd;
+    dx[jk] = dd, ax[jk] = aa;
+  }
+  float by[2], dyk[2], dxb[2], dxy[2];
+  for (int k = 0; k < 2; ++k) {
+    precise const float dy = ax[2 * k + 1] - ax[2 * k];
+    precise const float b = ax[2 * k] + t.y * dy;
+    precise const float dxyk = dx[2 * k + 1] - dx[2 * k];
+    precise const float dxbk = dx[2 * k] + t.y * dxyk;
+    dyk[k] = dy, by[k] = b, dxy[k] = dxyk, dxb[k] = dxbk;
+  }
+  precise const float value = by[0] + t.z * (by[1] - by[0]);
+  precise const vec3 slope = vec3(dxb[0] + t.z * (dxb[1] - dxb[0]), dyk[0] + t.z * (dyk[1] - dyk[0]), by[1] - by[0]);
+  precise const float xy = dxy[0] + t.z * (dxy[1] - dxy[0]);
+  precise const float xz = dxb[1] - dxb[0], yz = dyk[1] - dyk[0], xyz = dxy[1] - dxy[0];
+  p.value = value, p.slope = slope, p.xy = xy, p.xz = xz, p.yz = yz, p.xyz = xyz;
+  float lowest = p.node[0];
+  for (int k = 1; k < 8; ++k) lowest = min(lowest, p.node[k]);
+  p.lowestNode = lowest;
+  return p;
+}
 #elif DRAPE_SHAPE == DRAPE_SHAPE_HULL
 // A convex hull (the twin of Sdf<ConvexHull, S>): shape[0] = (centre, nearSurface), shape[1..3] = the rows of the
 // world-to-hull rotation, with the face count in shape[1].w; the faces and edges in the shape-data buffer

@@ -41,6 +41,7 @@ TEST_CASE("every shared constant reaches the shaders as the float the CPU kernel
                {"DRAPE_FACE_SEARCH_GAP", c::kFaceSearchGap},
                {"DRAPE_CUT_SLACK", c::kCutSlack},
                {"DRAPE_MIN_DESCENT_STEP", c::kMinDescentStep},
+               {"DRAPE_GRID_LIPSCHITZ", c::kGridLipschitz},
                {"DRAPE_PINCH_RATE", c::kPinchRate},
                {"DRAPE_PINCH_OPPOSING_COS", c::kPinchOpposingCos},
                {"DRAPE_LINE_MIN_ALONG", c::kLineMinAlong},
@@ -55,4 +56,6 @@ TEST_CASE("every shared constant reaches the shaders as the float the CPU kernel
   CHECK(defined(p, "DRAPE_CONTACT_SLOTS") == std::to_string(c::kContactSlots));
   CHECK(defined(p, "DRAPE_LEAST_SQUARES_STEPS") == std::to_string(c::kLeastSquaresSteps));
   CHECK(defined(p, "DRAPE_MAX_CUTS") == std::to_string(c::kMaxCuts));
+  CHECK(defined(p, "DRAPE_GRID_SEARCH_DEPTH") == std::to_string(c::kGridSearchDepth));
+  CHECK(defined(p, "DRAPE_GRID_SEARCH_BUDGET") == std::to_string(c::kGridSearchBudget));
 }

@@ -191,13 +191,16 @@ S boundOnTriangle(const Sampler& g, const Vec3<S> u[3], Vec3<S>& at, S& centroid
       local = n < kSlabs;
       if (local) slabs[a][n++] = {topCell, 1};
     }
-    outside = outside || slabs[a][0].side != 0 || slabs[a][n - 1].side != 0;
+    if (local) outside = outside || slabs[a][0].side != 0 || slabs[a][n - 1].side != 0;
   }
   at = Vec3<S>::Constant(S(1) / S(3));
   centroid = std::numeric_limits<S>::infinity();
   auto lipschitz = [&] {
-    centroid = g.distanceAt(c);
-    ++evaluations;
+    if (centroid == std::numeric_limits<S>::infinity()) {  // not yet known
+      centroid = g.distanceAt(c);
+      ++evaluations;
+    }
+    at = Vec3<S>::Constant(S(1) / S(3));
     const S reach = std::sqrt(std::max({d[0].squaredNorm(), d[1].squaredNorm(), d[2].squaredNorm()})) * g.cellSize;
     return centroid - S(constants::kGridLipschitz) * reach;
   };
