@@ -55,35 +55,47 @@ const int kGridDepth = DRAPE_GRID_SEARCH_DEPTH;
 const int kGridStack = 3 * kGridDepth + 4;
 const int kPolyMost = 9;  // Polygon::kMost
 vec3 partCuts[6];         // half-planes h0 + ha alpha + hb beta >= 0, as (h0, ha, hb)
-float polyA[kPolyMost + 1], polyB[kPolyMost + 1];
-int polyCorners;
 vec4 gridStack[kGridStack];  // sub-triangles (o1, o2, s, lower)
 
 float infinity() { return uintBitsToFloat(0x7F800000u); }
 
-// Polygon's constructor: the triangle (alpha, beta) >= 0, alpha + beta <= 1, clipped by each cut.
-void clipTriangle(int cutCount) {
-  polyA[0] = 0.0, polyB[0] = 0.0, polyA[1] = 1.0, polyB[1] = 0.0, polyA[2] = 0.0, polyB[2] = 1.0;
-  polyCorners = 3;
-  for (int k = 0; k < cutCount && polyCorners > 0; ++k) {
-    const vec3 h = partCuts[k];
-    float qa[kPolyMost + 1], qb[kPolyMost + 1];
-    int outCount = 0;
-    for (int i = 0; i < polyCorners && outCount + 2 <= kPolyMost + 1; ++i) {
-      const int j = i + 1 == polyCorners ? 0 : i + 1;
-      precise const float si = (h.x + h.y * polyA[i]) + h.z * polyB[i];
-      precise const float sj = (h.x + h.y * polyA[j]) + h.z * polyB[j];
-      if (si >= 0.0) qa[outCount] = polyA[i], qb[outCount] = polyB[i], ++outCount;
-      if ((si >= 0.0) != (sj >= 0.0)) {
-        precise const float t = si / (si - sj);
-        precise const float na = polyA[i] + t * (polyA[j] - polyA[i]);
-        precise const float nb = polyB[i] + t * (polyB[j] - polyB[i]);
-        qa[outCount] = na, qb[outCount] = nb, ++outCount;
-      }
+// A triangle's part in (alpha, beta) coordinates (Polygon).
+struct Polygon {
+  float a[kPolyMost + 1], b[kPolyMost + 1];
+  int corners;
+};
+
+Polygon wholeTriangle() {
+  Polygon p;
+  p.a[0] = 0.0, p.b[0] = 0.0, p.a[1] = 1.0, p.b[1] = 0.0, p.a[2] = 0.0, p.b[2] = 1.0;
+  p.corners = 3;
+  return p;
+}
+
+// Polygon::split: keeps in `keep` the part where h >= 0, and returns the part where h <= 0.
+Polygon splitPolygon(inout Polygon keep, vec3 h) {
+  Polygon rest;
+  rest.corners = 0;
+  float ka[kPolyMost + 1], kb[kPolyMost + 1];
+  int kept = 0;
+  for (int i = 0; i < keep.corners; ++i) {
+    const int j = i + 1 == keep.corners ? 0 : i + 1;
+    precise const float si = (h.x + h.y * keep.a[i]) + h.z * keep.b[i];
+    precise const float sj = (h.x + h.y * keep.a[j]) + h.z * keep.b[j];
+    if (si >= 0.0 && kept <= kPolyMost) ka[kept] = keep.a[i], kb[kept] = keep.b[i], ++kept;
+    if (si <= 0.0 && rest.corners <= kPolyMost)
+      rest.a[rest.corners] = keep.a[i], rest.b[rest.corners] = keep.b[i], ++rest.corners;
+    if ((si > 0.0 && sj < 0.0) || (si < 0.0 && sj > 0.0)) {
+      precise const float t = si / (si - sj);
+      precise const float ta = keep.a[i] + t * (keep.a[j] - keep.a[i]);
+      precise const float tb = keep.b[i] + t * (keep.b[j] - keep.b[i]);
+      if (kept <= kPolyMost) ka[kept] = ta, kb[kept] = tb, ++kept;
+      if (rest.corners <= kPolyMost) rest.a[rest.corners] = ta, rest.b[rest.corners] = tb, ++rest.corners;
     }
-    polyCorners = outCount;
-    for (int i = 0; i < outCount; ++i) polyA[i] = qa[i], polyB[i] = qb[i];
   }
+  keep.corners = kept;
+  for (int i = 0; i < kept; ++i) keep.a[i] = ka[i], keep.b[i] = kb[i];
+  return rest;
 }
 
 vec3 hessianTimes(CellPolynomial p, vec3 v) {
@@ -91,8 +103,9 @@ vec3 hessianTimes(CellPolynomial p, vec3 v) {
   return r;
 }
 
-// lowestOfQuadratic over the polygon clipTriangle left (cut by partCuts[0, cutCount)).
-float lowestOfQuadratic(CellPolynomial p, vec3 d0, vec3 d1, vec3 d2, int cutCount, out float alpha, out float beta) {
+// lowestOfQuadratic over the polygon `part` (bounded by partCuts[0, cutCount) within the triangle).
+float lowestOfQuadratic(CellPolynomial p, vec3 d0, vec3 d1, vec3 d2, Polygon part, int cutCount, out float alpha,
+                        out float beta) {
   precise const vec3 e1 = d1 - d0, e2 = d2 - d0;
   const vec3 h0 = hessianTimes(p, d0), h1 = hessianTimes(p, e1), h2 = hessianTimes(p, e2);
   precise const float f0 = (p.value + dot3(p.slope, d0)) + 0.5 * dot3(d0, h0);
@@ -101,12 +114,12 @@ float lowestOfQuadratic(CellPolynomial p, vec3 d0, vec3 d1, vec3 d2, int cutCoun
   const float a = dot3(e1, h1), b = dot3(e1, h2), c = dot3(e2, h2);
   float best = infinity();
   alpha = 0.0, beta = 0.0;
-  for (int i = 0; i < polyCorners; ++i) {
-    const float al = polyA[i], be = polyB[i];
+  for (int i = 0; i < part.corners; ++i) {
+    const float al = part.a[i], be = part.b[i];
     precise const float v = ((f0 + gp * al) + gq * be) + 0.5 * ((a * al * al + 2.0 * b * al * be) + c * be * be);
     if (v < best) best = v, alpha = al, beta = be;
-    const int j = i + 1 == polyCorners ? 0 : i + 1;
-    precise const float da = polyA[j] - al, db = polyB[j] - be;
+    const int j = i + 1 == part.corners ? 0 : i + 1;
+    precise const float da = part.a[j] - al, db = part.b[j] - be;
     precise const float slope = (gp + a * al + b * be) * da + (gq + b * al + c * be) * db;
     precise const float curve = (a * da * da + 2.0 * b * da * db) + c * db * db;
     if (curve > 0.0 && -slope > 0.0 && -slope < curve) {
@@ -132,7 +145,8 @@ float lowestOfQuadratic(CellPolynomial p, vec3 d0, vec3 d1, vec3 d2, int cutCoun
 
 // boundOnTriangle: a lower bound of the field over the triangle u0, u1, u2 (in cells), the place to try next as
 // corner weights, and the centroid's value when it comes free (infinity otherwise).
-float boundOnTriangle(vec3 u0, vec3 u1, vec3 u2, out vec3 at, out float middleValue, inout int evaluations) {
+float boundOnTriangle(vec3 u0, vec3 u1, vec3 u2, out vec3 at, out float middleValue, inout int evaluations,
+                      float cutoff) {
   const ivec3 count = gridCount();
   const float cellSize = gridCellSize();
   precise const vec3 c = ((u0 + u1) + u2) / 3.0;
@@ -179,19 +193,25 @@ float boundOnTriangle(vec3 u0, vec3 u1, vec3 u2, out vec3 at, out float middleVa
   precise const float cube = extent.x * extent.y * extent.z;
   precise const vec3 e1 = u1 - u0, e2 = u2 - u0;
   float lowest = infinity();
-  for (int i2 = 0; i2 < slabCount[2]; ++i2)
-    for (int i1 = 0; i1 < slabCount[1]; ++i1)
-      for (int i0 = 0; i0 < slabCount[0]; ++i0) {
+  // Split into slabs along x, each of those along y, then z (boundOnTriangle).
+  Polygon restX = wholeTriangle();
+  for (int i0 = 0; i0 < slabCount[0]; ++i0) {
+    Polygon inX = restX;
+    if (i0 + 1 < slabCount[0]) restX = splitPolygon(inX, vec3(splits[0][i0] - u0.x, -e1.x, -e2.x));
+    if (inX.corners == 0) continue;
+    Polygon restY = inX;
+    for (int i1 = 0; i1 < slabCount[1]; ++i1) {
+      Polygon inY = restY;
+      if (i1 + 1 < slabCount[1]) restY = splitPolygon(inY, vec3(splits[1][i1] - u0.y, -e1.y, -e2.y));
+      if (inY.corners == 0) continue;
+      Polygon restZ = inY;
+      for (int i2 = 0; i2 < slabCount[2]; ++i2) {
+        Polygon part = restZ;
+        if (i2 + 1 < slabCount[2]) restZ = splitPolygon(part, vec3(splits[2][i2] - u0.z, -e1.z, -e2.z));
+        if (part.corners == 0) continue;
         const ivec2 piece[3] = ivec2[3](slabs[0][i0], slabs[1][i1], slabs[2][i2]);
         const int index[3] = int[3](i0, i1, i2);
         const ivec3 cell = ivec3(piece[0].x, piece[1].x, piece[2].x);
-        int cutCount = 0;
-        for (int a = 0; a < 3; ++a) {
-          if (index[a] > 0) partCuts[cutCount++] = vec3(u0[a] - splits[a][index[a] - 1], e1[a], e2[a]);
-          if (index[a] + 1 < slabCount[a]) partCuts[cutCount++] = vec3(splits[a][index[a]] - u0[a], -e1[a], -e2[a]);
-        }
-        clipTriangle(cutCount);
-        if (polyCorners == 0) continue;
         vec3 t, w = vec3(0.0);
         bool clamped = false;
         for (int a = 0; a < 3; ++a) {
@@ -201,6 +221,12 @@ float boundOnTriangle(vec3 u0, vec3 u1, vec3 u2, out vec3 at, out float middleVa
         }
         CellPolynomial p = gridExpand(cell, t);
         ++evaluations;
+        if (!clamped && p.lowestNode >= cutoff) continue;
+        int cutCount = 0;
+        for (int a = 0; a < 3; ++a) {
+          if (index[a] > 0) partCuts[cutCount++] = vec3(u0[a] - splits[a][index[a] - 1], e1[a], e2[a]);
+          if (index[a] + 1 < slabCount[a]) partCuts[cutCount++] = vec3(splits[a][index[a]] - u0[a], -e1[a], -e2[a]);
+        }
         if (clamped) {
           for (int k = 0; k < 8; ++k) {
             bool onFace = true;
@@ -233,10 +259,12 @@ float boundOnTriangle(vec3 u0, vec3 u1, vec3 u2, out vec3 at, out float middleVa
           middleValue = p.value;
         }
         float al, be;
-        const float quadratic = lowestOfQuadratic(p, d0, d1, d2, cutCount, al, be);
+        const float quadratic = lowestOfQuadratic(p, d0, d1, d2, part, cutCount, al, be);
         precise const float bound = max(quadratic - abs(p.xyz) * cube, p.lowestNode);
         if (bound < lowest) lowest = bound, at = vec3((1.0 - al) - be, al, be);
       }
+    }
+  }
   return lowest;
 }
 #endif
@@ -375,7 +403,7 @@ void main() {
       precise const vec3 c2 = (u0 + o1 * ue1) + (o2 + sz) * ue2;
       vec3 at;
       float middleValue;
-      const float lower = boundOnTriangle(c0, c1, c2, at, middleValue, evaluations);
+      const float lower = boundOnTriangle(c0, c1, c2, at, middleValue, evaluations, min(value - tolerance, stopAt));
       if (middleValue < value) {
         precise const vec3 cb = vec3((1.0 - o1 - o2) - 2.0 * sz / 3.0, o1 + sz / 3.0, o2 + sz / 3.0);
         value = middleValue, best = cb;

@@ -100,6 +100,28 @@ template <Scalar S> struct Polygon {
       std::copy(qb, qb + out, b);
     }
   }
+
+  /// Keeps the part where h >= 0 and puts the part where h <= 0 in `rest` (a corner on the line goes to both).
+  void split(const HalfPlane<S>& h, Polygon& rest) {
+    S ka[kMost + 1], kb[kMost + 1];
+    int keep = 0;
+    rest.corners = 0;
+    for (int i = 0; i < corners; ++i) {
+      const int j = i + 1 == corners ? 0 : i + 1;
+      const S si = h.h0 + h.ha * a[i] + h.hb * b[i], sj = h.h0 + h.ha * a[j] + h.hb * b[j];
+      if (si >= S(0) && keep <= kMost) ka[keep] = a[i], kb[keep++] = b[i];
+      if (si <= S(0) && rest.corners <= kMost) rest.a[rest.corners] = a[i], rest.b[rest.corners++] = b[i];
+      if ((si > S(0) && sj < S(0)) || (si < S(0) && sj > S(0))) {
+        const S t = si / (si - sj);
+        const S ta = a[i] + t * (a[j] - a[i]), tb = b[i] + t * (b[j] - b[i]);
+        if (keep <= kMost) ka[keep] = ta, kb[keep++] = tb;
+        if (rest.corners <= kMost) rest.a[rest.corners] = ta, rest.b[rest.corners++] = tb;
+      }
+    }
+    corners = keep;
+    std::copy(ka, ka + keep, a);
+    std::copy(kb, kb + keep, b);
+  }
 };
 
 /// The minimum of the quadratic part of p (everything but the xyz term) over the triangle c + d[0], c + d[1],
@@ -153,7 +175,9 @@ S lowestOfQuadratic(const CellPolynomial<S>& p, const Vec3<S> d[3], S& alpha, S&
 
 /// A lower bound of the sampled field over the triangle with corners u[0..2] (in cells), with a point of it to
 /// try next as weights of the corners (`at`) and, when it is free, the field at the centroid (`centroid`,
-/// infinity when not known). Adds the cells it expanded (each a read of eight nodes) to `evaluations`.
+/// infinity when not known). Adds the cells it expanded (each a read of eight nodes) to `evaluations`. A cell
+/// whose nodes are all at or above `cutoff` is passed over: the bound is then exact only below the cutoff, which
+/// is all the search asks of it.
 ///
 /// Beyond the grid's box, where the triangle lies wholly below or above the box along an axis (clamped there),
 /// the field is |(e, G)|: e the distance to the box, G the trilinear field at the box's nearest point, which does
@@ -161,7 +185,8 @@ S lowestOfQuadratic(const CellPolynomial<S>& p, const Vec3<S> d[3], S& alpha, S&
 /// along (e, G) at the centroid it is tight to second order. e is convex, so its tangent plane at the centroid
 /// bounds it, and the sum is again a quadratic whose minimum over the triangle is found exactly.
 template <Scalar S, class Sampler>
-S boundOnTriangle(const Sampler& g, const Vec3<S> u[3], Vec3<S>& at, S& centroid, int& evaluations) {
+S boundOnTriangle(const Sampler& g, const Vec3<S> u[3], Vec3<S>& at, S& centroid, int& evaluations,
+                  S cutoff = std::numeric_limits<S>::infinity()) {
   const Vec3<S> c = (u[0] + u[1] + u[2]) / S(3);
   const Vec3<S> d[3] = {u[0] - c, u[1] - c, u[2] - c};
   const Vec3<S> lo = u[0].cwiseMin(u[1]).cwiseMin(u[2]), hi = u[0].cwiseMax(u[1]).cwiseMax(u[2]);
@@ -215,21 +240,27 @@ S boundOnTriangle(const Sampler& g, const Vec3<S> u[3], Vec3<S>& at, S& centroid
   const S cube = extent.x() * extent.y() * extent.z();
   const Vec3<S> e1 = u[1] - u[0], e2 = u[2] - u[0];
   S lowest = std::numeric_limits<S>::infinity();
-  for (int i2 = 0; i2 < slabCount[2]; ++i2)
-    for (int i1 = 0; i1 < slabCount[1]; ++i1)
-      for (int i0 = 0; i0 < slabCount[0]; ++i0) {
+  // The triangle is split into slabs along x, each of those along y, then z: every split is shared by the
+  // pieces beyond it, and an empty slab ends its branch.
+  auto below = [&](int a, S level) { return HalfPlane<S>{level - u[0][a], -e1[a], -e2[a]}; };  // u_a <= level
+  Polygon<S> restX;
+  for (int i0 = 0; i0 < slabCount[0]; ++i0) {
+    Polygon<S> inX = restX;
+    if (i0 + 1 < slabCount[0]) inX.split(below(0, split[0][i0]), restX);
+    if (inX.corners == 0) continue;
+    Polygon<S> restY = inX;
+    for (int i1 = 0; i1 < slabCount[1]; ++i1) {
+      Polygon<S> inY = restY;
+      if (i1 + 1 < slabCount[1]) inY.split(below(1, split[1][i1]), restY);
+      if (inY.corners == 0) continue;
+      Polygon<S> restZ = inY;
+      for (int i2 = 0; i2 < slabCount[2]; ++i2) {
+        Polygon<S> part = restZ;
+        if (i2 + 1 < slabCount[2]) part.split(below(2, split[2][i2]), restZ);
+        if (part.corners == 0) continue;  // the triangle misses this piece
         const Slab piece[3] = {slabs[0][i0], slabs[1][i1], slabs[2][i2]};
         const int index[3] = {i0, i1, i2};
         const std::array<Index, 3> cell{piece[0].cell, piece[1].cell, piece[2].cell};
-        // The piece's part of the triangle: above the split below it, below the split above it.
-        HalfPlane<S> cuts[6];
-        int cutCount = 0;
-        for (int a = 0; a < 3; ++a) {
-          if (index[a] > 0) cuts[cutCount++] = {u[0][a] - split[a][index[a] - 1], e1[a], e2[a]};
-          if (index[a] + 1 < slabCount[a]) cuts[cutCount++] = {split[a][index[a]] - u[0][a], -e1[a], -e2[a]};
-        }
-        const Polygon<S> part(cuts, cutCount);
-        if (part.corners == 0) continue;  // the triangle misses this piece
         Vec3<S> t, w = Vec3<S>::Zero();  // w: past the box along the piece's clamped axes (cells), about c
         bool clamped = false;
         for (int a = 0; a < 3; ++a) {
@@ -239,6 +270,14 @@ S boundOnTriangle(const Sampler& g, const Vec3<S> u[3], Vec3<S>& at, S& centroid
         }
         CellPolynomial<S> p = g.expand(cell, t);
         ++evaluations;
+        if (!clamped && p.lowestNode >= cutoff) continue;  // nothing in this cell is low enough to matter
+        // The piece's sides, for the test of an interior minimum.
+        HalfPlane<S> cuts[6];
+        int cutCount = 0;
+        for (int a = 0; a < 3; ++a) {
+          if (index[a] > 0) cuts[cutCount++] = {u[0][a] - split[a][index[a] - 1], e1[a], e2[a]};
+          if (index[a] + 1 < slabCount[a]) cuts[cutCount++] = below(a, split[a][index[a]]);
+        }
         if (clamped) {
           // |(e, G)| is the field where G >= 0 on the box's face: at the face's nodes, which bound it.
           for (int k = 0; k < 8; ++k) {
@@ -269,6 +308,8 @@ S boundOnTriangle(const Sampler& g, const Vec3<S> u[3], Vec3<S>& at, S& centroid
         const S bound = std::max(quadratic - std::abs(p.xyz) * cube, p.lowestNode);
         if (bound < lowest) lowest = bound, at = Vec3<S>(S(1) - alpha - beta, alpha, beta);
       }
+    }
+  }
   return lowest;
 }
 
@@ -301,7 +342,7 @@ Vec3<S> branchAndBoundOnFace(const Sampler& g, const Vec3<S> u[3], S phiC, S tol
                                u[0] + o1 * e1 + (o2 + s) * e2};
     Vec3<S> at;
     S centroid;
-    const S lower = boundOnTriangle(g, corner, at, centroid, evaluations);
+    const S lower = boundOnTriangle(g, corner, at, centroid, evaluations, threshold());
     if (centroid < value) value = centroid, best = Vec3<S>(S(1) - o1 - o2 - S(2) * s / S(3), o1 + s / S(3), o2 + s / S(3));
     if (lower < threshold()) {  // worth a look at the bound's lowest point
       const S b1 = o1 + s * at[1], b2 = o2 + s * at[2];
