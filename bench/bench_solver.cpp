@@ -2,6 +2,7 @@
 // Run: build/bench/bench_solver --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 // slopeStep: 50x80 at several substeps x iterations, one thread. slopeSize: 50x80 against 256x256 on one and on
 // two threads (substeps 5, iterations 1): the size and thread ratios come from one run of this binary.
+// meshDrop: a cloth dropped on meshed solids (grid fields), landing included.
 #include "slope.hpp"
 
 #include <benchmark/benchmark.h>
@@ -41,6 +42,44 @@ void slopeSize(benchmark::State& state) {
                   int(state.range(1)));
 }
 
+/// A 40 x 40 cloth (2 cm) dropped from 4 cm above a meshed solid (64-cell grid; friction 0.3, default
+/// settings) and left to settle, 60 frames of 1/60 s, landing included: the face search on a grid field as a
+/// scene uses it, exact or by descent. shape 0: a torus (R 0.15, r 0.05); 1: a box turned corner up; 2: an L
+/// block, concave edge up.
+void meshDrop(benchmark::State& state) {
+  const int shape = int(state.range(0));
+  drape::Settings settings;
+  settings.exactGridSearch = state.range(1) != 0;
+  static const auto torus = drape::buildDistanceGrid(drape::makeTorus(0.15, 0.05, 48, 24), {64});
+  static const auto box = drape::buildDistanceGrid(drape::makeBoxMesh(Eigen::Vector3d(0.12, 0.1, 0.08)), {64});
+  static const auto block = drape::buildDistanceGrid(drape::makeLBlock(0.4, 0.15, 0.1), {64});
+  drape::Solid<drape::MeshShape> solid;
+  solid.shape.grid = shape == 0 ? torus : shape == 1 ? box : block;
+  if (shape == 1) solid.pose.rotation = Eigen::AngleAxisd(0.9, Eigen::Vector3d(1, 1, 0).normalized());
+  solid.staticFriction = solid.dynamicFriction = 0.3;
+  const double top = shape == 0 ? 0.05 : shape == 1 ? 0.17 : 0.1;
+  drape::SheetDesc sheet;
+  sheet.nx = sheet.ny = 40;
+  sheet.spacing = 0.02;
+  sheet.placement.position = {0.01, -0.02, top + 0.04};
+  const auto asset = std::make_shared<const drape::ClothAsset<float>>(drape::ClothAsset<float>::sheet(sheet));
+  constexpr int kFrames = 60;
+  long long faceContacts = 0;
+  for (auto _ : state) {
+    drape::Solver<float> solver(asset, settings, 0.2);
+    solver.addSolid(solid);
+    for (int f = 0; f < kFrames; ++f) {
+      solver.step(1.0 / 60);
+      faceContacts += solver.stats().faceContacts;
+    }
+    benchmark::DoNotOptimize(solver.state().x.data());
+  }
+  const double items = double(asset->vertexCount()) * drape::Settings{}.subStepCount * kFrames;
+  state.counters["vertex_substep"] =
+      benchmark::Counter(items, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+  state.counters["face_contacts_per_frame"] = double(faceContacts) / double(kFrames * state.iterations());
+}
+
 void substepsAndIterations(benchmark::internal::Benchmark* b) {
   b->ArgNames({"substeps", "iterations"})->Args({5, 1})->Args({10, 1})->Args({5, 5})->Unit(benchmark::kMillisecond);
 }
@@ -58,6 +97,12 @@ BENCHMARK(slopeSize)
     ->Args({256, 2})
     ->Args({50, 2})
     ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
+
+// exact 1: the branch and bound (the default); 0: the projected gradient descent (Settings::exactGridSearch).
+BENCHMARK(meshDrop)
+    ->ArgNames({"shape", "exact"})
+    ->ArgsProduct({{0, 1, 2}, {1, 0}})
     ->Unit(benchmark::kMillisecond);
 
 }  // namespace

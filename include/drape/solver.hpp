@@ -335,7 +335,7 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
   void projectAll(S thickness, bool faces) {
     const PassInputs<S> in{state_.x.data(),       state_.invMass.data(),        xPredicted_.data(),
                            asset_->triangles,      thickness,                    settings_.pgdIterations,
-                           settings_.culling};
+                           settings_.culling,      settings_.exactGridSearch};
     passes_.projectAll(compiled_, in, faces, reconcile_, solidCount(),
                        settings_.collisionMethod == CollisionMethod::InSolve);
   }

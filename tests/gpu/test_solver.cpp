@@ -279,6 +279,9 @@ TEST_CASE("the GPU solver rejects bad settings and solids before changing anythi
   CHECK_THROWS_WITH(gpu.setSettings(noCulling), Catch::Contains("culling"));
   CHECK_THROWS_WITH(gpu.setSettings(noBroadPhase), Catch::Contains("broadPhase"));
   CHECK_THROWS_WITH(gpu.setSettings(threads), Catch::Contains("threadCount"));
+  drape::Settings descent = parts.settings;
+  descent.exactGridSearch = false;
+  CHECK_THROWS_WITH(gpu.setSettings(descent), Catch::Contains("exactGridSearch"));
   CHECK_THROWS_WITH(drape::gpu::Solver(drape::test::gpuContext(), parts.asset, noCulling),
                     Catch::Contains("culling"));
   CHECK(gpu.settings().culling);

@@ -26,6 +26,7 @@ template <Scalar S> struct PassInputs {
   S thickness;
   int pgdIterations;
   bool culling;
+  bool exactGridSearch;
 };
 
 template <Scalar S> class ContactPasses {
@@ -126,7 +127,7 @@ template <Scalar S> class ContactPasses {
             bins_.faces(x, solid.boxLow, solid.boxHigh, thickness, nearFaces_);
             bins_.noteDrift(projectFaceContacts<kCull, true>(solid, thickness, in.pgdIterations, in.triangles,
                                                              ItemList{nearFaces_.data()}, Index(nearFaces_.size()), x,
-                                                             w, contacts_, stats_, bins_.binned()));
+                                                             w, contacts_, stats_, bins_.binned(), in.exactGridSearch));
           }
         }
       } else {
@@ -137,7 +138,8 @@ template <Scalar S> class ContactPasses {
           DRAPE_OMP(single)
           {
             const S moved = projectFaceContacts<kCull>(solid, thickness, in.pgdIterations, in.triangles, AllItems{},
-                                                       Index(in.triangles.size()), x, w, contacts_, stats_, binned);
+                                                       Index(in.triangles.size()), x, w, contacts_, stats_, binned,
+                                                       in.exactGridSearch);
             if (useBins_) bins_.noteDrift(moved);
           }
         }

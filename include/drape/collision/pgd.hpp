@@ -198,11 +198,12 @@ FaceQuery<S> descendOnFace(const Field& sdf, const Vec3<S>& x0, const Vec3<S>& x
 
 /// One face against one field: the bounding-sphere cull (when kCull) and, if the face may come within margin,
 /// its deepest point: cutting planes on a convex field, a field's own search where it has one (a grid's branch
-/// and bound, which spends up to kGridSearchBudget cell reads rather than maxIterations), the descent otherwise.
+/// and bound, which spends up to kGridSearchBudget cell reads rather than maxIterations, unless exactSearch is
+/// false: Settings::exactGridSearch), the descent otherwise.
 /// Returns false when culled. Shared by the solver's face pass and the penetration metric.
 template <bool kCull, Scalar S, class Field>
 bool queryFace(const Field& sdf, const Vec3<S>& x0, const Vec3<S>& x1, const Vec3<S>& x2, S margin,
-               int maxIterations, FaceQuery<S>& q) {
+               int maxIterations, FaceQuery<S>& q, bool exactSearch = true) {
   const FaceSphere<S> sphere = faceSphere<S>(x0, x1, x2);
   if constexpr (kCull && requires { sdf.lowerBound(sphere.centre); }) {
     // A field with a cheap lower bound culls with it first: where the bound clears the sphere, phi does too.
@@ -222,9 +223,12 @@ bool queryFace(const Field& sdf, const Vec3<S>& x0, const Vec3<S>& x1, const Vec
   const S floor = kCull ? margin : std::numeric_limits<S>::infinity();
   if constexpr (Field::kConvex)
     q = deepestPointOnFace<S>(sdf, x0, x1, x2, sphere.centre, phiC, gradC, maxIterations, floor);
-  else if constexpr (requires { sdf.deepestPointOnFace(x0, x1, x2, x0, phiC, gradC, maxIterations, floor); })
-    q = sdf.deepestPointOnFace(x0, x1, x2, sphere.centre, phiC, gradC, constants::kGridSearchBudget, floor);
-  else
+  else if constexpr (requires { sdf.deepestPointOnFace(x0, x1, x2, x0, phiC, gradC, maxIterations, floor); }) {
+    if (exactSearch)
+      q = sdf.deepestPointOnFace(x0, x1, x2, sphere.centre, phiC, gradC, constants::kGridSearchBudget, floor);
+    else
+      q = descendOnFace<S>(sdf, x0, x1, x2, sphere.centre, phiC, gradC, maxIterations);
+  } else
     q = descendOnFace<S>(sdf, x0, x1, x2, sphere.centre, phiC, gradC, maxIterations);
   return true;
 }

@@ -245,7 +245,8 @@ VertexPassShare<S> projectVertexContacts(Index begin, Index end, const CompiledS
 template <bool kCull, bool kBody, bool kBoxed, class Shape, Scalar S, class Ids>
 S projectFaceContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, int pgdIterations,
                         const std::vector<std::array<Index, 3>>& triangles, Ids ids, Index count, Vec3<S>* x,
-                        const S* invMass, ContactBuffer<S>& contacts, CollisionStats& stats, const Vec3<S>* binned) {
+                        const S* invMass, ContactBuffer<S>& contacts, CollisionStats& stats, const Vec3<S>* binned,
+                        bool exactSearch = true) {
   S moved = 0;
   [[maybe_unused]] const Vec3<S> boxLow = solid.boxLow.array() - thickness;
   [[maybe_unused]] const Vec3<S> boxHigh = solid.boxHigh.array() + thickness;
@@ -260,7 +261,7 @@ S projectFaceContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, int p
       }
     }
     FaceQuery<S> q;
-    if (!queryFace<kCull>(solid.sdf, x[t[0]], x[t[1]], x[t[2]], thickness, pgdIterations, q)) {
+    if (!queryFace<kCull>(solid.sdf, x[t[0]], x[t[1]], x[t[2]], thickness, pgdIterations, q, exactSearch)) {
       ++stats.facesCulled;
       ++stats.sdfEvaluations;
       continue;
@@ -288,10 +289,11 @@ S projectFaceContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, int p
 template <bool kCull, bool kBoxed = false, class Shape, Scalar S, class Ids>
 S projectFaceContacts(const CompiledSolid<Shape, S>& solid, S thickness, int pgdIterations,
                       const std::vector<std::array<Index, 3>>& triangles, Ids ids, Index count, Vec3<S>* x,
-                      const S* invMass, ContactBuffer<S>& contacts, CollisionStats& stats, const Vec3<S>* binned) {
+                      const S* invMass, ContactBuffer<S>& contacts, CollisionStats& stats, const Vec3<S>* binned,
+                      bool exactSearch = true) {
   return withFlags([&](auto body) {
     return projectFaceContactsAs<kCull, body(), kBoxed>(solid, thickness, pgdIterations, triangles, ids, count, x,
-                                                        invMass, contacts, stats, binned);
+                                                        invMass, contacts, stats, binned, exactSearch);
   }, solid.motion.body >= 0);
 }
 
