@@ -2,6 +2,7 @@
 // against direct evaluation, and whole searches against a 200-subdivision brute force on meshes with sharp
 // edges and corners, concave edges and curved surfaces, at several resolutions and orientations.
 
+#include "face_search_helpers.hpp"
 #include "sanitizer.hpp"
 
 #include <drape/drape.hpp>
@@ -27,40 +28,9 @@ using drape::Index;
 using drape::Vec3;
 using V3 = Eigen::Vector3d;
 
-double uniform(std::mt19937& rng, double lo, double hi) { return std::uniform_real_distribution<double>(lo, hi)(rng); }
-
-V3 randomUnit(std::mt19937& rng) {
-  std::normal_distribution<double> n(0, 1);
-  for (;;) {
-    const V3 v(n(rng), n(rng), n(rng));
-    if (v.norm() > 1e-6) return v.normalized();
-  }
-}
-
-/// A roughly equilateral triangle of edge about `edge` centred on `centre`, randomly turned and skewed.
-std::array<V3, 3> randomTriangle(std::mt19937& rng, const V3& centre, double edge) {
-  const V3 n = randomUnit(rng);
-  const V3 u = n.unitOrthogonal(), v = n.cross(u);
-  const double a0 = uniform(rng, 0, 2 * std::numbers::pi);
-  std::array<V3, 3> t;
-  for (int k = 0; k < 3; ++k) {
-    const double a = a0 + k * 2 * std::numbers::pi / 3 + uniform(rng, -0.35, 0.35);
-    t[std::size_t(k)] = centre + edge / std::sqrt(3.0) * uniform(rng, 0.8, 1.2) * (std::cos(a) * u + std::sin(a) * v);
-  }
-  return t;
-}
-
-/// The smallest phi over a barycentric lattice of the face, `n` subdivisions per side, corners included.
-template <class S, class Field> S bruteMinimum(const Field& sdf, const std::array<Vec3<S>, 3>& x, int n) {
-  S best = std::numeric_limits<S>::infinity();
-  Vec3<S> g;
-  for (int i = 0; i <= n; ++i)
-    for (int j = 0; j <= n - i; ++j) {
-      const S b0 = S(i) / S(n), b1 = S(j) / S(n), b2 = S(n - i - j) / S(n);
-      best = std::min(best, sdf(Vec3<S>(b0 * x[0] + b1 * x[1] + b2 * x[2]), g));
-    }
-  return best;
-}
+using drape::test::faces::bruteMinimum;
+using drape::test::faces::randomTriangle;
+using drape::test::faces::uniform;
 
 /// A mesh, the resolution of its grid, and how far from its surface the test's faces are centred.
 struct Case {

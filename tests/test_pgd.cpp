@@ -1,6 +1,8 @@
 // The deepest-point search (projectToSimplex, deepestPointOnFace) against brute force, and bounding-sphere
 // culling: exact per face, and invisible at the solver level.
 
+#include "face_search_helpers.hpp"
+
 #include <drape/drape.hpp>
 
 #include <catch2/catch.hpp>
@@ -28,16 +30,9 @@ using V3 = Eigen::Vector3d;
 // ------------------------------------------------------------------------------------------------------------
 // Helpers
 
-double uniform(std::mt19937& rng, double lo, double hi) { return std::uniform_real_distribution<double>(lo, hi)(rng); }
-
-V3 randomUnit(std::mt19937& rng) {
-  std::normal_distribution<double> n(0, 1);
-  for (;;) {
-    const V3 v(n(rng), n(rng), n(rng));
-    const double len = v.norm();
-    if (len > 1e-6) return v / len;
-  }
-}
+using drape::test::faces::bruteMinimum;
+using drape::test::faces::randomUnit;
+using drape::test::faces::uniform;
 
 /// A point uniformly inside the ball of the given radius.
 V3 randomInBall(std::mt19937& rng, double radius) {
@@ -60,36 +55,12 @@ struct Tri {
   double meanEdge() const { return ((x[1] - x[0]).norm() + (x[2] - x[1]).norm() + (x[0] - x[2]).norm()) / 3; }
 };
 
-/// A roughly equilateral triangle of edge about `edge`, centred on `centre`, randomly turned and skewed.
 Tri randomTriangle(std::mt19937& rng, const V3& centre, double edge) {
-  const V3 n = randomUnit(rng);
-  const V3 u = n.unitOrthogonal();
-  const V3 v = n.cross(u);
-  const double r = edge / std::sqrt(3.0);
-  const double a0 = uniform(rng, 0, 2 * std::numbers::pi);
-  Tri t;
-  for (int k = 0; k < 3; ++k) {
-    const double a = a0 + k * 2 * std::numbers::pi / 3 + uniform(rng, -0.35, 0.35);
-    const double rk = r * uniform(rng, 0.8, 1.2);
-    t.x[k] = centre + rk * (std::cos(a) * u + std::sin(a) * v);
-  }
-  return t;
+  return {drape::test::faces::randomTriangle(rng, centre, edge)};
 }
 
 template <class S> std::array<Vec3<S>, 3> toLocal(const Tri& t, const V3& origin) {
   return {(t.x[0] - origin).cast<S>(), (t.x[1] - origin).cast<S>(), (t.x[2] - origin).cast<S>()};
-}
-
-/// The smallest phi over a dense barycentric grid of the face (`n` subdivisions per side, vertices included).
-template <class S, class Field> S bruteMinimum(const Field& sdf, const std::array<Vec3<S>, 3>& x, int n) {
-  S best = std::numeric_limits<S>::infinity();
-  Vec3<S> g;
-  for (int i = 0; i <= n; ++i)
-    for (int j = 0; j <= n - i; ++j) {
-      const S b0 = S(i) / S(n), b1 = S(j) / S(n), b2 = S(n - i - j) / S(n);
-      best = std::min(best, sdf(Vec3<S>(b0 * x[0] + b1 * x[1] + b2 * x[2]), g));
-    }
-  return best;
 }
 
 /// deepestPointOnFace called exactly as projectFaceContacts calls it.

@@ -15,8 +15,8 @@
 // with its own cell's polynomial: the field has a kink there, and a bound that ignored it would shrink only as
 // fast as the sub-triangle, which along a valley of the field (a box's edge seen from inside) costs thousands of
 // sub-triangles. Each cell's bound is also at least the cell's lowest node. A sub-triangle that spans more than
-// two cells along an axis or crosses a face of the grid's box falls back on the field's Lipschitz bound; beyond
-// the box the field has bounds of the same kind (boundOnTriangle).
+// four slabs along an axis (cells, and the space beyond the grid's box) falls back on the field's Lipschitz
+// bound; beyond the box the field has bounds of the same kind (boundOnTriangle).
 
 #include <drape/collision/pgd.hpp>  // FaceQuery
 #include <drape/kernel_constants.hpp>
