@@ -73,33 +73,15 @@ template <Scalar S> struct HalfPlane {
   S h0, ha, hb;
 };
 
-/// A triangle's part in (alpha, beta) coordinates, cut by half-planes: a convex polygon of up to kMost corners.
+/// A triangle's part in (alpha, beta) coordinates, split off by half-planes: a convex polygon of up to kMost
+/// corners.
 template <Scalar S> struct Polygon {
   static constexpr int kMost = 3 + 6;  // a triangle cut twice along each axis
   S a[kMost + 1], b[kMost + 1];
   int corners = 3;
 
-  /// The whole triangle, clipped by each cut (each adds at most one corner).
-  Polygon(const HalfPlane<S>* cuts = nullptr, int cutCount = 0) {
-    a[0] = S(0), b[0] = S(0), a[1] = S(1), b[1] = S(0), a[2] = S(0), b[2] = S(1);
-    for (int k = 0; k < cutCount && corners > 0; ++k) {
-      const HalfPlane<S>& h = cuts[k];
-      S qa[kMost + 1], qb[kMost + 1];
-      int out = 0;
-      for (int i = 0; i < corners && out + 2 <= kMost + 1; ++i) {
-        const int j = i + 1 == corners ? 0 : i + 1;
-        const S si = h.h0 + h.ha * a[i] + h.hb * b[i], sj = h.h0 + h.ha * a[j] + h.hb * b[j];
-        if (si >= S(0)) qa[out] = a[i], qb[out++] = b[i];
-        if ((si >= S(0)) != (sj >= S(0))) {
-          const S t = si / (si - sj);
-          qa[out] = a[i] + t * (a[j] - a[i]), qb[out++] = b[i] + t * (b[j] - b[i]);
-        }
-      }
-      corners = out;
-      std::copy(qa, qa + out, a);
-      std::copy(qb, qb + out, b);
-    }
-  }
+  /// The whole triangle.
+  Polygon() { a[0] = S(0), b[0] = S(0), a[1] = S(1), b[1] = S(0), a[2] = S(0), b[2] = S(1); }
 
   /// Keeps the part where h >= 0 and puts the part where h <= 0 in `rest` (a corner on the line goes to both).
   void split(const HalfPlane<S>& h, Polygon& rest) {
