@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <type_traits>
 
 namespace stability {
@@ -25,6 +26,15 @@ template <class Solver> double mechanicalEnergy(const Solver& s, const V3& ref =
     e += m * (0.5 * v.squaredNorm() - g.dot(shift + st.x[i].template cast<double>()));
   }
   return e;
+}
+
+/// A square n x n sheet of the given spacing (m), centred at `at`.
+template <class S> std::shared_ptr<const drape::ClothAsset<S>> gridAsset(int n, double spacing, const V3& at) {
+  drape::SheetDesc grid;
+  grid.nx = grid.ny = n;
+  grid.spacing = spacing;
+  grid.placement.position = at;
+  return std::make_shared<const drape::ClothAsset<S>>(drape::ClothAsset<S>::sheet(grid));
 }
 
 /// Total mass of the free vertices (kg).

@@ -66,14 +66,6 @@ template <class Solver> void runFor(Solver& solver, double dt, double seconds, W
   for (int f = 0; f < frames && watch.finite; ++f) solver.step(dt, [&](const Solver& s) { watch(s); });
 }
 
-template <class S> std::shared_ptr<const drape::ClothAsset<S>> gridAsset(int n, double spacing, const V3& at) {
-  drape::SheetDesc grid;
-  grid.nx = grid.ny = n;
-  grid.spacing = spacing;
-  grid.placement.position = at;
-  return std::make_shared<const drape::ClothAsset<S>>(drape::ClothAsset<S>::sheet(grid));
-}
-
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------------------------

@@ -40,6 +40,15 @@ inline constexpr int kGridSearchBudget = 512;
 /// box distance's 1; rounded up past the nodes' float rounding.
 inline constexpr double kGridLipschitz = 2.75;
 
+// Continuous contact (docs/design.md §18).
+/// A vertex whose path in a substep, relative to a solid, is shorter than this share of the thickness is left to
+/// the discrete passes: starting outside the thickness it cannot reach the solid's far side.
+inline constexpr double kSweepGate = 0.5;
+/// Most field evaluations along one vertex's path (conservative advancement).
+inline constexpr int kSweepSteps = 64;
+/// Most face searches along one face's sweep.
+inline constexpr int kFaceSweepSteps = 32;
+
 // Several solids meeting (docs/design.md §16).
 /// Extra vertex passes on the true fields where solids meet.
 inline constexpr int kSettlePasses = 4;

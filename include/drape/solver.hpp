@@ -117,6 +117,8 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     for (std::size_t k = 0; k < pins_.size(); ++k)
       pinLocal_[k] = {pins_[k].vertex, (pins_[k].target - state_.origin).template cast<S>()};
     passes_.prepare(settings_.broadPhase && has.bounded > 0, coupled_);
+    // Continuous contact needs the start positions, and only a bounded solid (not a half-space) can be crossed.
+    sweep_ = settings_.continuousContact && settings_.collisionMethod != CollisionMethod::InSolve && has.bounded > 0;
     if (coupled_ && vStart_.size() != state_.v.size()) {
       vStart_.resize(state_.v.size());
       vPre_.resize(state_.v.size());
@@ -154,7 +156,7 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     // 4. collide
     if (coupled_) copyVelocities(vPre_);  // before any contact acts
     if (settings_.collisionMethod != CollisionMethod::InSolve) {
-      projectAll(S(settings_.thickness), settings_.collisionMethod == CollisionMethod::Faces);
+      projectAll(S(settings_.thickness), settings_.collisionMethod == CollisionMethod::Faces, h);
       respondAndPropagate(h);
     }
     // 5. the cloth's push on the coupled bodies, applied before they move (docs/design.md §6)
@@ -181,7 +183,7 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     const Index n = vertexCount();
     withFlags([&](auto keepStart) {
       teamFor(n, [&](Index b, Index e) { predictPositions<keepStart()>(b, e, x, v, w, gh, h, x0, xp, xw); });
-    }, hasFriction_ || coupled_);
+    }, hasFriction_ || coupled_ || sweep_);
   }
 
   /// 2. iterationCount passes over the constraints, set by set, then the pins; the in-solve method's contacts
@@ -223,6 +225,21 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
         });
       }
     }
+  }
+
+  /// The farthest a free vertex travelled in the substep (h |v| after the update, which is (x - x_start) / h),
+  /// for continuous contact: the sum of the threads' largest, a bound on the largest.
+  S measureTravel(const S h) {
+    DRAPE_OMP(single)
+    travel_ = 0;
+    const Vec3<S>* v = state_.v.data();
+    S fastest = 0;
+    teamForNoWait(vertexCount(), [&](Index b, Index e) {
+      for (Index i = b; i < e; ++i) fastest = std::max(fastest, v[i].squaredNorm());
+    });
+    teamAdd(travel_, h * std::sqrt(fastest));
+    DRAPE_OMP(barrier)
+    return travel_;
   }
 
   /// 3. update velocity (updateVelocities). Where a vertex may touch several surfaces, the positions the
@@ -332,10 +349,15 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
   }
 
   /// All contacts of a substep (ContactPasses::projectAll).
-  void projectAll(S thickness, bool faces) {
-    const PassInputs<S> in{state_.x.data(),       state_.invMass.data(),        xPredicted_.data(),
-                           asset_->triangles,      thickness,                    settings_.pgdIterations,
-                           settings_.culling,      settings_.exactGridSearch};
+  void projectAll(S thickness, bool faces, S h = S(0)) {
+    PassInputs<S> in{state_.x.data(),       state_.invMass.data(),        xPredicted_.data(),
+                     asset_->triangles,      thickness,                    settings_.pgdIterations,
+                     settings_.culling,      settings_.exactGridSearch};
+    if (sweep_ && h > S(0)) {
+      const S gate = S(constants::kSweepGate) * thickness;
+      in.sweep = {xPrev_.data(), h, gate * gate};
+      in.travel = measureTravel(h);
+    }
     passes_.projectAll(compiled_, in, faces, reconcile_, solidCount(),
                        settings_.collisionMethod == CollisionMethod::InSolve);
   }
@@ -386,6 +408,8 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
   bool repulsive_ = false;    ///< some solid has a repulsion region this substep
   bool reconcile_ = false;    ///< a vertex may touch several surfaces this substep
   bool coupled_ = false;      ///< some solid is a dynamic body this substep
+  bool sweep_ = false;        ///< continuous contact searches the paths this substep (a bounded solid exists)
+  S travel_ = 0;              ///< the substep's farthest vertex travel (shared by the team)
   bool massesChanged_ = false;  ///< an inverse mass changed since the lane copies were gathered
   std::vector<Vec3<S>> vStart_, vPre_;                  ///< velocities at the substep's start, before contacts
   std::vector<coupling::BodySums> bodySums_;  ///< what each coupled body's exchange and pinches add up to

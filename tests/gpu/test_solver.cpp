@@ -282,6 +282,10 @@ TEST_CASE("the GPU solver rejects bad settings and solids before changing anythi
   drape::Settings descent = parts.settings;
   descent.exactGridSearch = false;
   CHECK_THROWS_WITH(gpu.setSettings(descent), Catch::Contains("exactGridSearch"));
+  drape::Settings swept = parts.settings;
+  swept.continuousContact = true;
+  CHECK_THROWS_WITH(gpu.setSettings(swept), Catch::Contains("continuousContact"));
+  CHECK_FALSE(gpu.settings().continuousContact);
   CHECK_THROWS_WITH(drape::gpu::Solver(drape::test::gpuContext(), parts.asset, noCulling),
                     Catch::Contains("culling"));
   CHECK(gpu.settings().culling);

@@ -27,6 +27,10 @@ template <Scalar S> struct PassInputs {
   int pgdIterations;
   bool culling;
   bool exactGridSearch;
+  /// Continuous contact (docs/design.md §18): the start positions and the substep (sweep.start null: off), and
+  /// the farthest any vertex travelled this substep.
+  SweepInputs<S> sweep = {};
+  S travel = 0;
 };
 
 template <Scalar S> class ContactPasses {
@@ -72,8 +76,8 @@ template <Scalar S> class ContactPasses {
       }
       moveBound_ = 0;
     }
-    withFlags([&](auto withFaces, auto cull) { project<withFaces(), withFaces() && cull()>(compiled, in); }, faces,
-              in.culling);
+    withFlags([&](auto withFaces, auto cull) { project<withFaces(), withFaces() && cull(), true>(compiled, in); },
+              faces, in.culling);
     if (!reconcile) return;  // a lone plane gives each vertex one surface: nothing to reconcile
     settle(in);
     if (solidCount < 2) return;
@@ -82,7 +86,7 @@ template <Scalar S> class ContactPasses {
       // ending the vertex pass below), so all take the same branch.
       const auto before = stats_.vertexContacts;
       DRAPE_OMP(barrier)
-      project<false, false>(compiled, in, S(constants::kSettleSlack) * in.thickness);
+      project<false, false, false>(compiled, in, S(constants::kSettleSlack) * in.thickness);
       if (stats_.vertexContacts == before) break;
       settle(in);
     }
@@ -97,58 +101,85 @@ template <Scalar S> class ContactPasses {
   /// Projects every vertex, then (when kFaces and the field is not linear) every face, out of each solid in
   /// turn, recording the contacts. On a linear field a face is deepest at a vertex, which the vertex pass has
   /// already handled. Vertices already within `slack` of the thickness are left where they are. With the bins
-  /// on, a bounded solid visits only the vertices and faces they find near its box.
-  template <bool kFaces, bool kCull, class Solids> void project(const Solids& compiled, const PassInputs<S>& in,
-                                                                S slack = S(0)) {
+  /// on, a bounded solid visits only the vertices and faces they find near its box. With kMaySweep, continuous
+  /// contact searches the paths of the substep where they may be long enough to matter (sweepReach).
+  template <bool kFaces, bool kCull, bool kMaySweep, class Solids>
+  void project(const Solids& compiled, const PassInputs<S>& in, S slack = S(0)) {
     const Index n = Index(contacts_.slotCount.size());
-    std::apply([&](const auto&... lists) { (projectList<kFaces, kCull>(lists, in, slack, n), ...); }, compiled);
+    std::apply([&](const auto&... lists) { (projectList<kFaces, kCull, kMaySweep>(lists, in, slack, n), ...); },
+               compiled);
   }
 
-  template <bool kFaces, bool kCull, class List>
+  /// How far a vertex's path this substep can reach relative to a solid: its own travel and the solid's motion
+  /// where the vertex may be (the box grown by the thickness and the travel). 0 where nothing is swept: continuous
+  /// contact off, or a linear field (a half-space has no far side to reach).
+  template <class Solid> static S sweepReach(const Solid& solid, const PassInputs<S>& in) {
+    if (in.sweep.start == nullptr || std::decay_t<decltype(solid.sdf)>::kLinear) return S(0);
+    const SolidMotion<S>& m = solid.motion;
+    const S around = (solid.boxHigh - m.centre).cwiseAbs().cwiseMax((solid.boxLow - m.centre).cwiseAbs()).norm() +
+                     in.thickness + S(2) * in.travel;
+    return in.travel + in.sweep.h * (m.linearVelocity.norm() + m.angularVelocity.norm() * around);
+  }
+
+  template <bool kFaces, bool kCull, bool kMaySweep, class List>
   void projectList(const List& list, const PassInputs<S>& in, S slack, Index n) {
+    for (const auto& solid : list) {
+      if constexpr (kMaySweep) {
+        const S reach = sweepReach(solid, in);
+        if (reach * reach > in.sweep.gate2) {
+          projectSolid<kFaces, kCull, true>(solid, in, slack, n, reach);
+          continue;
+        }
+      }
+      projectSolid<kFaces, kCull, false>(solid, in, slack, n, S(0));
+    }
+  }
+
+  /// One solid's passes; with kSweep, the broad phase's queries grow by `reach`, the farthest a path can come
+  /// from where it ends.
+  template <bool kFaces, bool kCull, bool kSweep, class Solid>
+  void projectSolid(const Solid& solid, const PassInputs<S>& in, S slack, Index n, S reach) {
     Vec3<S>* x = in.x;
     const S* w = in.invMass;
     const S thickness = in.thickness;
-    for (const auto& solid : list) {
-      constexpr bool kFacePass = kFaces && !std::decay_t<decltype(solid.sdf)>::kLinear;
-      if (useBins_ && solid.bounded) {
+    constexpr bool kFacePass = kFaces && !std::decay_t<decltype(solid.sdf)>::kLinear;
+    if (useBins_ && solid.bounded) {
+      DRAPE_OMP(single)
+      {
+        if (bins_.stale()) bins_.build(x, in.triangles);
+        bins_.vertices(x, solid.boxLow, solid.boxHigh, thickness + reach, nearVertices_);
+      }
+      projectVertices<kSweep>(solid, in, ItemList{nearVertices_.data()}, Index(nearVertices_.size()),
+                              bins_.binned(), slack);
+      DRAPE_OMP(single)
+      {
+        bins_.noteDrift(moveBound_);
+        moveBound_ = 0;
+        if constexpr (kFacePass) {
+          bins_.faces(x, solid.boxLow, solid.boxHigh, thickness + reach, nearFaces_);
+          bins_.noteDrift(projectFaceContacts<kCull, true, kSweep>(
+              solid, thickness, in.pgdIterations, in.triangles, ItemList{nearFaces_.data()},
+              Index(nearFaces_.size()), x, w, contacts_, stats_, bins_.binned(), in.exactGridSearch, in.sweep));
+        }
+      }
+    } else {
+      // Without the bins, the binned positions are the positions: nothing drifts.
+      const Vec3<S>* binned = useBins_ ? bins_.binned() : x;
+      projectVertices<kSweep>(solid, in, AllItems{}, n, binned, slack);
+      if constexpr (kFacePass) {
         DRAPE_OMP(single)
         {
-          if (bins_.stale()) bins_.build(x, in.triangles);
-          bins_.vertices(x, solid.boxLow, solid.boxHigh, thickness, nearVertices_);
+          const S moved = projectFaceContacts<kCull, false, kSweep>(
+              solid, thickness, in.pgdIterations, in.triangles, AllItems{}, Index(in.triangles.size()), x, w,
+              contacts_, stats_, binned, in.exactGridSearch, in.sweep);
+          if (useBins_) bins_.noteDrift(moved);
         }
-        projectVertices(solid, in, ItemList{nearVertices_.data()}, Index(nearVertices_.size()), bins_.binned(),
-                        slack);
+      }
+      if (useBins_) {
         DRAPE_OMP(single)
         {
           bins_.noteDrift(moveBound_);
           moveBound_ = 0;
-          if constexpr (kFacePass) {
-            bins_.faces(x, solid.boxLow, solid.boxHigh, thickness, nearFaces_);
-            bins_.noteDrift(projectFaceContacts<kCull, true>(solid, thickness, in.pgdIterations, in.triangles,
-                                                             ItemList{nearFaces_.data()}, Index(nearFaces_.size()), x,
-                                                             w, contacts_, stats_, bins_.binned(), in.exactGridSearch));
-          }
-        }
-      } else {
-        // Without the bins, the binned positions are the positions: nothing drifts.
-        const Vec3<S>* binned = useBins_ ? bins_.binned() : x;
-        projectVertices(solid, in, AllItems{}, n, binned, slack);
-        if constexpr (kFacePass) {
-          DRAPE_OMP(single)
-          {
-            const S moved = projectFaceContacts<kCull>(solid, thickness, in.pgdIterations, in.triangles, AllItems{},
-                                                       Index(in.triangles.size()), x, w, contacts_, stats_, binned,
-                                                       in.exactGridSearch);
-            if (useBins_) bins_.noteDrift(moved);
-          }
-        }
-        if (useBins_) {
-          DRAPE_OMP(single)
-          {
-            bins_.noteDrift(moveBound_);
-            moveBound_ = 0;
-          }
         }
       }
     }
@@ -157,15 +188,20 @@ template <Scalar S> class ContactPasses {
   /// One solid's vertex pass over ids[0, count), shared by the team. The counts and the move bound are added
   /// once per thread (the sum of the threads' largest moves bounds the largest; only the bins read it, and the
   /// contacts do not depend on it); the barrier after them lets every thread read the totals.
-  template <class Solid, class Ids>
+  template <bool kSweep, class Solid, class Ids>
   void projectVertices(const Solid& solid, const PassInputs<S>& in, Ids ids, Index count, const Vec3<S>* binned,
                        S slack) {
     VertexPassShare<S> share;
     teamForNoWait(count, [&](Index b, Index e) {
-      share = projectVertexContacts(b, e, solid, in.thickness, in.x, in.invMass, ids, contacts_, binned, slack);
+      share = projectVertexContacts<kSweep>(b, e, solid, in.thickness, in.x, in.invMass, ids, contacts_, binned,
+                                            slack, in.sweep);
     });
     teamAdd(stats_.vertexContacts, share.found);
     teamAdd(stats_.sdfEvaluations, share.evaluated);
+    if constexpr (kSweep) {
+      teamAdd(stats_.vertexSweeps, share.swept);
+      teamAdd(stats_.sweepContacts, share.sweptFound);
+    }
     teamAdd(moveBound_, share.moved);
     DRAPE_OMP(barrier)
   }

@@ -196,6 +196,14 @@ FaceQuery<S> descendOnFace(const Field& sdf, const Vec3<S>& x0, const Vec3<S>& x
   return q;
 }
 
+/// The field's Lipschitz constant: 1 for a true distance, a grid's stated bound (Field::kLipschitz) otherwise.
+template <class Field> constexpr double lipschitzOf() {
+  if constexpr (requires { Field::kLipschitz; })
+    return double(Field::kLipschitz);
+  else
+    return 1.0;
+}
+
 /// One face against one field: the bounding-sphere cull (when kCull) and, if the face may come within margin,
 /// its deepest point: cutting planes on a convex field, a field's own search where it has one (a grid's branch
 /// and bound, which spends up to kGridSearchBudget cell reads rather than maxIterations, unless exactSearch is
@@ -211,14 +219,8 @@ bool queryFace(const Field& sdf, const Vec3<S>& x0, const Vec3<S>& x1, const Vec
   }
   Vec3<S> gradC;
   const S phiC = sdf(sphere.centre, gradC);
-  if constexpr (kCull) {
-    // A field steeper than a true distance (a grid's) states how much: the sphere test scales by it.
-    if constexpr (requires { Field::kLipschitz; }) {
-      if (phiC > S(Field::kLipschitz) * sphere.radius + margin) return false;
-    } else if (phiC > sphere.radius + margin) {
-      return false;
-    }
-  }
+  // A field steeper than a true distance (a grid's) states how much: the sphere test scales by it.
+  if (kCull && phiC > S(lipschitzOf<Field>()) * sphere.radius + margin) return false;
   // With culling, the search's own bounds cull too.
   const S floor = kCull ? margin : std::numeric_limits<S>::infinity();
   if constexpr (Field::kConvex)

@@ -6,6 +6,7 @@
 #include <drape/kernel_constants.hpp>
 #include <drape/cloth/asset.hpp>
 #include <drape/collision/pgd.hpp>
+#include <drape/collision/sweep.hpp>
 #include <drape/sdf/solid.hpp>
 
 #include <drape/detail/parallel.hpp>
@@ -177,6 +178,22 @@ struct CollisionStats {
   std::int64_t faceContacts = 0;  ///< face-solid pairs whose deepest point was within the thickness
   std::int64_t vertexContacts = 0;
   std::int64_t sdfEvaluations = 0;
+  std::int64_t vertexSweeps = 0;  ///< vertex paths searched by continuous contact
+  std::int64_t faceSweeps = 0;    ///< face paths searched by continuous contact
+  std::int64_t sweepContacts = 0;  ///< of those paths, the ones that came within the thickness on the way
+};
+
+/// What continuous contact reads (docs/design.md §18): where each vertex started the substep, the substep, and
+/// the squared length below which a path relative to the solid is left to the discrete passes.
+template <Scalar S> struct SweepInputs {
+  const Vec3<S>* start = nullptr;
+  S h = 0;
+  S gate2 = 0;
+  /// Where vertex i started, carried with the solid's motion over the substep (the solid's point there moves
+  /// by h v_c): the start of its path in the frame of the solid as compiled, at the substep's end.
+  DRAPE_ALWAYS_INLINE Vec3<S> startOf(Index i, const SolidMotion<S>& m) const {
+    return start[i] + h * m.velocityAt(start[i]);
+  }
 };
 
 /// Which vertices (or faces) a pass visits: all of them, or a list from the broad phase. Both are inlined, so
@@ -192,21 +209,43 @@ struct ItemList {
 /// What one share of a vertex pass did: how many vertices it moved and how many it looked at, and the largest
 /// distance of a moved vertex from where the broad phase binned it (the caller adds it to the bins' drift).
 template <Scalar S> struct VertexPassShare {
-  std::int64_t found = 0, evaluated = 0;
+  std::int64_t found = 0, evaluated = 0, swept = 0, sweptFound = 0;
   S moved = 0;
 };
 
 /// Moves every free vertex of ids[begin, end) closer than `thickness` (by more than `slack`) out along the
 /// normal and records the contact. Without a broad phase, `binned` is the positions themselves.
-template <bool kBody, class Shape, Scalar S, class Ids>
+///
+/// With kSweep (continuous contact), a vertex whose path this substep, relative to the solid, is longer than the
+/// gate is first searched along that path (sweepPoint). Where the path came within the thickness, the vertex goes
+/// to the thickness beyond the field's tangent plane there: the side the path came from, whatever side of a thin
+/// solid it ended on. The discrete test then runs on where that left it.
+template <bool kBody, bool kSweep, class Shape, Scalar S, class Ids>
 VertexPassShare<S> projectVertexContactsAs(Index begin, Index end, const CompiledSolid<Shape, S>& solid,
                                            S thickness, Vec3<S>* x, const S* invMass, Ids ids,
-                                           ContactBuffer<S>& contacts, const Vec3<S>* binned, S slack) {
+                                           ContactBuffer<S>& contacts, const Vec3<S>* binned, S slack,
+                                           const SweepInputs<S>& sweep) {
   VertexPassShare<S> share;
   S moved = 0;
   for (Index k = begin; k < end; ++k) {
     const Index i = ids[k];
     if (invMass[i] == S(0)) continue;
+    if constexpr (kSweep) {
+      const Vec3<S> from = sweep.startOf(i, solid.motion);
+      if ((x[i] - from).squaredNorm() > sweep.gate2) {
+        const SweepHit<S> hit = sweepPoint(solid.sdf, from, x[i], thickness);
+        ++share.swept;
+        share.evaluated += hit.evaluations;
+        const S beyond = hit.phi + hit.normal.dot(x[i] - hit.point);  // the end against the tangent plane
+        if (hit.hit && beyond < thickness) {
+          const S dn = thickness - beyond;
+          x[i] += dn * hit.normal;
+          contacts.template record<kBody>(i, x[i], hit.normal, dn, solid.motion, x[i]);
+          moved = std::max(moved, (x[i] - binned[i]).squaredNorm());
+          ++share.sweptFound;
+        }
+      }
+    }
     Vec3<S> n;
     const S phi = solid.sdf(x[i], n);
     if (phi >= thickness - slack) continue;
@@ -216,16 +255,17 @@ VertexPassShare<S> projectVertexContactsAs(Index begin, Index end, const Compile
     moved = std::max(moved, (x[i] - binned[i]).squaredNorm());
     ++share.found;
   }
-  share.evaluated = end - begin;
+  share.evaluated += end - begin;
   share.moved = std::sqrt(moved);
   return share;
 }
-template <class Shape, Scalar S, class Ids>
+template <bool kSweep = false, class Shape, Scalar S, class Ids>
 VertexPassShare<S> projectVertexContacts(Index begin, Index end, const CompiledSolid<Shape, S>& solid, S thickness,
                                          Vec3<S>* x, const S* invMass, Ids ids, ContactBuffer<S>& contacts,
-                                         const Vec3<S>* binned, S slack = S(0)) {
+                                         const Vec3<S>* binned, S slack = S(0), const SweepInputs<S>& sweep = {}) {
   return withFlags([&](auto body) {
-    return projectVertexContactsAs<body()>(begin, end, solid, thickness, x, invMass, ids, contacts, binned, slack);
+    return projectVertexContactsAs<body(), kSweep>(begin, end, solid, thickness, x, invMass, ids, contacts, binned,
+                                                   slack, sweep);
   }, solid.motion.body >= 0);
 }
 
@@ -242,16 +282,61 @@ VertexPassShare<S> projectVertexContacts(Index begin, Index end, const CompiledS
 /// The box is read when the face's turn comes, on the positions as the faces before it left them, so the
 /// contacts are bit for bit those of the pass without the check. Such faces count as culled. In the 80-body
 /// rain the grid hands on 125 faces per body and substep, and 115 of them were culled by a field evaluation each.
-template <bool kCull, bool kBody, bool kBoxed, class Shape, Scalar S, class Ids>
+///
+/// With kSweep (continuous contact), a face whose corners travelled further than the gate relative to the solid
+/// is first searched along its path (sweepFace); from its first contact on, no corner goes further against the
+/// contact normal than it was then. The discrete query then runs on where that left it.
+template <bool kCull, bool kBody, bool kBoxed, bool kSweep, class Shape, Scalar S, class Ids>
 S projectFaceContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, int pgdIterations,
                         const std::vector<std::array<Index, 3>>& triangles, Ids ids, Index count, Vec3<S>* x,
                         const S* invMass, ContactBuffer<S>& contacts, CollisionStats& stats, const Vec3<S>* binned,
-                        bool exactSearch = true) {
+                        bool exactSearch, const SweepInputs<S>& sweep) {
   S moved = 0;
   [[maybe_unused]] const Vec3<S> boxLow = solid.boxLow.array() - thickness;
   [[maybe_unused]] const Vec3<S> boxHigh = solid.boxHigh.array() + thickness;
   for (Index f = 0; f < count; ++f) {
     const auto& t = triangles[std::size_t(ids[f])];
+    if constexpr (kSweep) {
+      // Continuous contact: a face whose corners travelled further than the gate relative to the solid is
+      // searched along its path first (sweepFace).
+      const Vec3<S> from[3] = {sweep.startOf(t[0], solid.motion), sweep.startOf(t[1], solid.motion),
+                               sweep.startOf(t[2], solid.motion)};
+      const Vec3<S> to[3] = {x[t[0]], x[t[1]], x[t[2]]};
+      if (std::max({(to[0] - from[0]).squaredNorm(), (to[1] - from[1]).squaredNorm(),
+                    (to[2] - from[2]).squaredNorm()}) > sweep.gate2) {
+        bool near = true;
+        if constexpr (kBoxed) {  // the box of the whole path against the solid's
+          const Vec3<S> low =
+              from[0].cwiseMin(from[1]).cwiseMin(from[2]).cwiseMin(to[0]).cwiseMin(to[1]).cwiseMin(to[2]);
+          const Vec3<S> high =
+              from[0].cwiseMax(from[1]).cwiseMax(from[2]).cwiseMax(to[0]).cwiseMax(to[1]).cwiseMax(to[2]);
+          near = (high.array() >= boxLow.array()).all() && (low.array() <= boxHigh.array()).all();
+        }
+        if (near) {
+          ++stats.faceSweeps;
+          FaceQuery<S> hit;
+          int evaluations = 0;
+          S when = 0;
+          if (sweepFace(solid.sdf, from, to, thickness, pgdIterations, exactSearch, hit, evaluations, when)) {
+            // From the first contact on, no corner goes further against the contact normal than it was then: the
+            // face keeps its travel along the surface and loses the rest of its approach.
+            const Vec3<S>& n = hit.normal;
+            bool any = false;
+            for (int k = 0; k < 3; ++k) {
+              if (invMass[t[k]] == S(0)) continue;
+              const S dn = n.dot(from[k] + when * (to[k] - from[k]) - x[t[k]]);
+              if (!(dn > S(0))) continue;
+              x[t[k]] += dn * n;
+              contacts.template record<kBody>(t[k], x[t[k]], n, dn, solid.motion, x[t[k]]);
+              moved = std::max(moved, (x[t[k]] - binned[t[k]]).squaredNorm());
+              any = true;
+            }
+            stats.sweepContacts += any;
+          }
+          stats.sdfEvaluations += evaluations;
+        }
+      }
+    }
     if constexpr (kBoxed && kCull) {
       const Vec3<S> faceLow = x[t[0]].cwiseMin(x[t[1]]).cwiseMin(x[t[2]]);
       const Vec3<S> faceHigh = x[t[0]].cwiseMax(x[t[1]]).cwiseMax(x[t[2]]);
@@ -286,14 +371,15 @@ S projectFaceContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, int p
   stats.facesTested += count;
   return std::sqrt(moved);
 }
-template <bool kCull, bool kBoxed = false, class Shape, Scalar S, class Ids>
+template <bool kCull, bool kBoxed = false, bool kSweep = false, class Shape, Scalar S, class Ids>
 S projectFaceContacts(const CompiledSolid<Shape, S>& solid, S thickness, int pgdIterations,
                       const std::vector<std::array<Index, 3>>& triangles, Ids ids, Index count, Vec3<S>* x,
                       const S* invMass, ContactBuffer<S>& contacts, CollisionStats& stats, const Vec3<S>* binned,
-                      bool exactSearch = true) {
+                      bool exactSearch = true, const SweepInputs<S>& sweep = {}) {
   return withFlags([&](auto body) {
-    return projectFaceContactsAs<kCull, body(), kBoxed>(solid, thickness, pgdIterations, triangles, ids, count, x,
-                                                        invMass, contacts, stats, binned, exactSearch);
+    return projectFaceContactsAs<kCull, body(), kBoxed, kSweep>(solid, thickness, pgdIterations, triangles, ids,
+                                                                count, x, invMass, contacts, stats, binned,
+                                                                exactSearch, sweep);
   }, solid.motion.body >= 0);
 }
 

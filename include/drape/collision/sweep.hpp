@@ -1,0 +1,86 @@
+#pragma once
+// Continuous contact (docs/design.md §18): the paths a vertex and a face take in a substep, relative to a solid,
+// searched by conservative advancement for the first place they come within the thickness, so that a substep's
+// travel cannot carry the cloth through a solid thinner than it. The discrete passes see only where the cloth
+// ends; these see the whole path.
+
+#include <drape/collision/pgd.hpp>
+#include <drape/kernel_constants.hpp>
+
+namespace drape {
+
+/// How far a path first came within the thickness: the point, the field's value and outward gradient there.
+template <Scalar S> struct SweepHit {
+  Vec3<S> point;
+  Vec3<S> normal;
+  S phi;
+  bool hit;
+  int evaluations;
+};
+
+/// The first point of the segment a -> b where it comes within `thickness` of the solid, by conservative
+/// advancement: from a point at distance phi, no point of the segment within (phi - thickness / 2) / L of it (L
+/// the field's Lipschitz constant) is closer than half the thickness, so the search jumps that far. It never
+/// steps over the solid, and stops within the thickness on the side the path came from. A path that starts
+/// inside the solid came from no side and is left to the discrete pass. No hit within kSweepSteps evaluations
+/// counts as none.
+template <Scalar S, class Field>
+SweepHit<S> sweepPoint(const Field& sdf, const Vec3<S>& a, const Vec3<S>& b, S thickness) {
+  const Vec3<S> d = b - a;
+  const S stride = S(lipschitzOf<Field>()) * d.norm();  // how much phi can change per unit of t
+  SweepHit<S> out{a, Vec3<S>::Zero(), S(0), false, 0};
+  S t = 0;
+  while (out.evaluations < constants::kSweepSteps) {
+    const Vec3<S> q = a + t * d;
+    Vec3<S> n;
+    const S phi = sdf(q, n);
+    ++out.evaluations;
+    if (phi < thickness) return {q, n, phi, t > S(0) || phi >= S(0), out.evaluations};
+    t += (phi - S(0.5) * thickness) / stride;
+    if (!(t < S(1))) break;  // past the end (or a NaN): the discrete pass judges the end point
+  }
+  return out;
+}
+
+/// The face moving from corners a[0..2] to b[0..2] (each corner along its own segment, every point of the face
+/// along the segment of its barycentric mix): the first time `when` it comes within `thickness` of the solid,
+/// and its deepest point then (q, on the face a + when (b - a)). Conservative advancement as in sweepPoint, with
+/// a lower bound on the face in place of a point's distance: its bounding sphere's, phi(centre) - L radius,
+/// where that clears the thickness, else the face search's (queryFace, which certifies the face beyond the
+/// thickness or finds the point within it). No point of the face moves further than its farthest corner.
+/// Returns false for a face that starts inside the solid, or no hit within kFaceSweepSteps positions, or none
+/// before the end (the discrete face pass judges the end).
+template <Scalar S, class Field>
+bool sweepFace(const Field& sdf, const Vec3<S> (&a)[3], const Vec3<S> (&b)[3], S thickness, int maxIterations,
+               bool exactSearch, FaceQuery<S>& q, int& evaluations, S& when) {
+  const S lipschitz = S(lipschitzOf<Field>());
+  const Vec3<S> d[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+  const S travel = std::sqrt(std::max({d[0].squaredNorm(), d[1].squaredNorm(), d[2].squaredNorm()}));
+  const S stride = lipschitz * travel;
+  const S half = S(0.5) * thickness;
+  S t = 0;
+  for (int step = 0; step < constants::kFaceSweepSteps; ++step) {
+    const Vec3<S> y0 = a[0] + t * d[0], y1 = a[1] + t * d[1], y2 = a[2] + t * d[2];
+    const FaceSphere<S> sphere = faceSphere<S>(y0, y1, y2);
+    Vec3<S> gradient;
+    const S lower = sdf(sphere.centre, gradient) - lipschitz * sphere.radius;
+    ++evaluations;
+    if (lower >= thickness) {
+      t += (lower - half) / stride;
+    } else {
+      FaceQuery<S> found;
+      const bool near = queryFace<true>(sdf, y0, y1, y2, thickness, maxIterations, found, exactSearch);
+      evaluations += near ? found.evaluations : 1;
+      if (near && found.phi < thickness) {
+        q = found;
+        when = t;
+        return t > S(0) || found.phi >= S(0);
+      }
+      t += half / stride;  // certified beyond the thickness
+    }
+    if (!(t < S(1))) break;
+  }
+  return false;
+}
+
+}  // namespace drape
