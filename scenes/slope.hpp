@@ -1,7 +1,8 @@
 #pragma once
 // The inclined-plane scene of the SDF collision paper (Figs 5 and 8): a horizontal cloth above a slope falls, lands and
-// slides; or, started partly inside the slope, is pushed out of it. Shared by the sample, the tests and the benches, so
-// all three measure the same thing.
+// slides; or, started partly inside the slope, is pushed out of it; or, with a ridge in place of the slope, falls
+// onto a box's top edge and hangs over it. Shared by the sample, the tests and the benches, so all three measure
+// the same thing.
 
 #include <drape/drape.hpp>
 
@@ -30,6 +31,10 @@ struct SlopeConfig {
   /// m, vertical gap between the cloth's uphill edge and the slope at the start; a large one drops the cloth flat
   /// from a height, a negative one starts its uphill part inside the slope (that edge -gap below the surface)
   double gap = 0.05;
+  /// In place of the slope, a ridge: a long box (0.5 m square section) turned 45 degrees about x, so that one edge
+  /// runs along x on top (at height 0) with faces falling 45 degrees to each side; `angleDeg` is then unused and
+  /// the friction is the ridge's. The cloth starts `gap` above the edge and should come to rest hanging over it.
+  bool ridge = false;
   double areaDensity = 0.1;    ///< kg/m^2
   double windowStart = 0.5;    ///< metrics use frames from this fraction of the run to its end
   bool penetrationEverySubstep = false;  ///< measure penetration after every substep (slow), else every frame
@@ -61,12 +66,25 @@ inline Eigen::Quaterniond slopeRotation(double angleDeg) {
 /// Down the slope, in world coordinates.
 inline Eigen::Vector3d downhill(double angleDeg) { return slopeRotation(angleDeg) * Eigen::Vector3d(0, -1, 0); }
 
-/// What a slope scene is made of, for any solver: the cloth, its settings and the slope.
+/// What a slope scene is made of, for any solver: the cloth, its settings and the slope (or the ridge).
 template <Scalar S> struct SlopeParts {
   std::shared_ptr<const ClothAsset<S>> asset;
   Settings settings;
   Solid<Plane> slope;
+  bool hasRidge = false;
+  Solid<Box> ridge;
+
+  /// Adds the scene's solid to a solver (CPU or GPU).
+  template <class SolverT> void addSolidsTo(SolverT& solver) const {
+    if (hasRidge)
+      solver.addSolid(ridge);
+    else
+      solver.addSolid(slope);
+  }
 };
+
+/// The ridge's half side (m): the box's square section is twice this.
+inline constexpr double kRidgeHalfSide = 0.25;
 
 template <Scalar S> SlopeParts<S> slopeParts(const SlopeConfig& c) {
   detail::requireRange(c.angleDeg, 0, 80, "angle");
@@ -80,7 +98,7 @@ template <Scalar S> SlopeParts<S> slopeParts(const SlopeConfig& c) {
   grid.ny = c.ny;
   grid.spacing = c.spacing;
   const double halfY = 0.5 * (c.ny - 1) * c.spacing;
-  grid.placement.position = Eigen::Vector3d(0, 0, halfY * std::tan(theta) + c.gap);
+  grid.placement.position = Eigen::Vector3d(0, 0, c.ridge ? c.gap : halfY * std::tan(theta) + c.gap);
   SlopeParts<S> parts;
   parts.asset = std::make_shared<const ClothAsset<S>>(ClothAsset<S>::sheet(grid));
   parts.settings = c.base;
@@ -89,13 +107,20 @@ template <Scalar S> SlopeParts<S> slopeParts(const SlopeConfig& c) {
   parts.settings.collisionMethod = c.method;
   parts.slope.pose.rotation = slopeRotation(c.angleDeg);
   parts.slope.staticFriction = parts.slope.dynamicFriction = c.friction;
+  if (c.ridge) {
+    parts.hasRidge = true;
+    parts.ridge.shape.halfExtents = {0.5 * (c.nx - 1) * c.spacing + 0.2, kRidgeHalfSide, kRidgeHalfSide};
+    parts.ridge.pose.rotation = Eigen::AngleAxisd(std::numbers::pi / 4, Eigen::Vector3d::UnitX());
+    parts.ridge.pose.position = {0, 0, -kRidgeHalfSide * std::numbers::sqrt2};  // the top edge at height 0
+    parts.ridge.staticFriction = parts.ridge.dynamicFriction = c.friction;
+  }
   return parts;
 }
 
 template <Scalar S> Solver<S> makeSlope(const SlopeConfig& c) {
   const SlopeParts<S> parts = slopeParts<S>(c);
   Solver<S> solver(parts.asset, parts.settings, c.areaDensity);
-  solver.addSolid(parts.slope);
+  parts.addSolidsTo(solver);
   return solver;
 }
 
@@ -118,8 +143,10 @@ SlopeResult runSlopeOn(SolverT& solver, const SlopeConfig& c, const std::functio
   const Index n = solver.vertexCount();
   const double theta = c.angleDeg * std::numbers::pi / 180.0;
   const double g = c.base.gravity.norm();
-  const Eigen::Vector3d down = downhill(c.angleDeg);
-  const Eigen::Vector3d normal = slopeRotation(c.angleDeg) * Eigen::Vector3d::UnitZ();
+  // On the ridge, "down" and the tracked height are vertical: the cloth hangs still, so its fitted acceleration
+  // and creep should be 0.
+  const Eigen::Vector3d down = c.ridge ? Eigen::Vector3d(0, 0, -1) : downhill(c.angleDeg);
+  const Eigen::Vector3d normal = c.ridge ? Eigen::Vector3d::UnitZ() : slopeRotation(c.angleDeg) * Eigen::Vector3d::UnitZ();
   const Index tracked = (c.ny / 2) * c.nx + c.nx / 2;  // the centre vertex (the SDF collision paper's Fig 5)
   const int windowFrame = std::clamp(int(c.windowStart * c.frames), 1, c.frames);
 
@@ -210,7 +237,8 @@ SlopeResult runSlopeOn(SolverT& solver, const SlopeConfig& c, const std::functio
   }
   const double windowTime = (c.frames - windowFrame) * c.dt;
   r.creep = windowTime > 0 ? down.dot(com - comWindow) / windowTime : 0;
-  r.analyticAcceleration = std::tan(theta) > c.friction ? g * (std::sin(theta) - c.friction * std::cos(theta)) : 0;
+  r.analyticAcceleration =
+      !c.ridge && std::tan(theta) > c.friction ? g * (std::sin(theta) - c.friction * std::cos(theta)) : 0;
   const StrainStats strain = stretchStrain(solver.asset(), solver.state().x);
   r.meanStrain = strain.mean;
   r.maxStrain = strain.max;

@@ -19,6 +19,8 @@
 
 #include <filesystem>
 #include <iostream>
+#include <numbers>
+#include <string>
 
 int main(int argc, char** argv) {
   drape::scenes::SlopeConfig c;
@@ -40,6 +42,9 @@ int main(int argc, char** argv) {
                  "m from the cloth's uphill edge down to the slope at the start; negative starts that edge inside")
       ->check(CLI::Range(-1.0, 100.0))
       ->capture_default_str();
+  app.add_flag("--ridge", c.ridge,
+               "a ridge in place of the slope: a box turned 45 deg about x, one edge on top at height 0 (--angle unused)");
+  app.add_flag("--continuous", c.base.continuousContact, "continuous contact: search each substep's paths (CPU only)");
   app.add_option("--method", method, "collision method")->check(CLI::IsMember({"faces", "vertices", "in-solve"}))->capture_default_str();
   app.add_option("--scalar", scalar, "floating-point type")->check(CLI::IsMember({"float", "double"}))->capture_default_str();
   app.add_flag("--json", json, "print one JSON object on stdout");
@@ -84,9 +89,18 @@ int main(int argc, char** argv) {
       painter->begin(cam);
       const Eigen::Vector3d onSlope = centre - slopeNormal.dot(centre) * slopeNormal, across = Eigen::Vector3d::UnitX();
       drape::gpu::DrawMesh slope;
-      for (double a : {-2.0, 2.0})
-        for (double b : {-3.0, 3.0}) slope.positions.push_back(onSlope + a * across + b * down);
-      slope.triangles = {{0, 2, 3}, {0, 3, 1}};
+      if (c.ridge) {  // the two upper faces of the ridge, from its top edge down
+        const double side = 2 * drape::scenes::kRidgeHalfSide;
+        for (double a : {-2.0, 2.0})
+          for (const Eigen::Vector3d& p : {Eigen::Vector3d(0, -side, -side), Eigen::Vector3d(0, 0, 0),
+                                           Eigen::Vector3d(0, side, -side)})
+            slope.positions.push_back(p / std::numbers::sqrt2 + Eigen::Vector3d(centre.x() + a, 0, 0));
+        slope.triangles = {{0, 3, 4}, {0, 4, 1}, {1, 4, 5}, {1, 5, 2}};
+      } else {
+        for (double a : {-2.0, 2.0})
+          for (double b : {-3.0, 3.0}) slope.positions.push_back(onSlope + a * across + b * down);
+        slope.triangles = {{0, 2, 3}, {0, 3, 1}};
+      }
       painter->draw(slope, Eigen::Vector3f(0.75f, 0.75f, 0.72f), true);
       drawCloth();
       const auto rgba = painter->pixels();
@@ -102,7 +116,7 @@ int main(int argc, char** argv) {
       if (scalar != "float") throw drape::Error("--gpu runs float only");
       const auto parts = drape::scenes::slopeParts<float>(c);
       drape::gpu::Solver solver(*context, parts.asset, parts.settings, c.areaDensity);
-      solver.addSolid(parts.slope);
+      parts.addSolidsTo(solver);
       r = drape::scenes::runSlopeOn(solver, c, [&](int f) {
         if (!painter || f % pngEvery != 0) return;
         Eigen::Vector3d centre = Eigen::Vector3d::Zero();
@@ -152,6 +166,8 @@ int main(int argc, char** argv) {
     j["angle_deg"] = c.angleDeg;
     j["friction"] = c.friction;
     j["gap"] = c.gap;
+    j["ridge"] = c.ridge;
+    j["continuous_contact"] = c.base.continuousContact;
     j["frames"] = c.frames;
     j["dt"] = c.dt;
     j["ms_per_frame"] = r.msPerFrame;
@@ -171,10 +187,11 @@ int main(int argc, char** argv) {
     j["finite"] = r.finite;
     if (json) std::cout << j.dump() << '\n';
     std::fprintf(stderr,
-                 "%s: %s/%s %dx%d, %d substeps x %d iterations, %.0f deg, mu %.2f, %d frames: %.3f ms/frame "
+                 "%s: %s/%s %dx%d, %d substeps x %d iterations, %s, mu %.2f, %d frames: %.3f ms/frame "
                  "(%.1f ns per vertex-substep)\n  trembling rms %.3g m/s (max %.3g), acceleration %.4f m/s^2 "
                  "(analytic %.4f), creep %.3g m/s, penetration %.3g m, strain mean %.3g max %.3g, contact %.0f%%\n",
-                 device.c_str(), method.c_str(), scalar.c_str(), c.nx, c.ny, c.subSteps, c.iterations, c.angleDeg, c.friction,
+                 device.c_str(), method.c_str(), scalar.c_str(), c.nx, c.ny, c.subSteps, c.iterations,
+                 c.ridge ? "ridge" : (std::to_string(int(std::lround(c.angleDeg))) + " deg").c_str(), c.friction,
                  c.frames, r.msPerFrame, r.nsPerVertexSubstep, r.tremblingRms, r.tremblingMax, r.acceleration,
                  r.analyticAcceleration, r.creep, r.maxPenetration, r.meanStrain, r.maxStrain,
                  100 * r.contactFraction);
