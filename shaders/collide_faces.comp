@@ -7,7 +7,8 @@
 // along the face, so the search stops once the best value is certified), on a grid field branch and bound with
 // bounds from the cells' trilinear polynomials. Where that point is closer than the thickness, the face's
 // vertices move along the normal, weighted by barycentric weight and inverse mass, to carry it to the thickness.
-// The moves are recorded in the vertices' contacts (recordContact, as the CPU records them).
+// The moves are recorded in the vertices' contacts (recordContact, as the CPU records them). With continuous contact
+// (docs/design.md §18), a face that travelled far is first searched along its path (sweepFace).
 //
 // The CPU visits every face in index order; here the colours go in turn and the faces of one colour at once,
 // which is another order of the same Gauss-Seidel pass: a colour's faces on their own give the CPU's bits.
@@ -25,6 +26,8 @@ layout(location = DRAPE_U_PGD_ITERATIONS) uniform int maxIterations;
 layout(location = DRAPE_U_FRICTION) uniform vec2 friction;  // static, dynamic
 layout(location = DRAPE_U_BOX_LOW) uniform vec3 boxLow;
 layout(location = DRAPE_U_BOX_HIGH) uniform vec3 boxHigh;
+layout(std430, binding = DRAPE_B_START) readonly buffer Start { vec4 starts[]; };
+layout(location = DRAPE_U_SWEEP) uniform vec2 sweep;  // the substep h and the gate squared; 0 (unset): no sweeps
 #if DRAPE_BODY
 layout(std430, binding = DRAPE_B_LINES) buffer LinesBuffer { Lines lines[]; };
 layout(location = DRAPE_U_BODY) uniform int body;  // the coupled body this solid pushes
@@ -269,15 +272,9 @@ float boundOnTriangle(vec3 u0, vec3 u1, vec3 u2, out vec3 at, out float middleVa
 }
 #endif
 
-void main() {
-  if (gl_GlobalInvocationID.x >= count) return;
-  const uvec4 t = faces[first + gl_GlobalInvocationID.x];
-  const vec4 a = x[t.x], b = x[t.y], c = x[t.z];
-  const vec3 x0 = a.xyz, x1 = b.xyz, x2 = c.xyz;
-  // A face whose box misses the solid's box grown by the thickness has no point within the thickness of it
-  // (projectFaceContactsAs with kBoxed): culled before any field evaluation.
-  precise const vec3 low = boxLow - vec3(thickness), high = boxHigh + vec3(thickness);
-  if (!(all(greaterThanEqual(max(max(x0, x1), x2), low)) && all(lessThanEqual(min(min(x0, x1), x2), high)))) return;
+// One face against the field (queryFace): the bounding-sphere cull and, if the face may come within `margin`, its
+// deepest point (barycentric qb, point qp, normal qn, distance qphi). False when culled.
+bool searchFace(vec3 x0, vec3 x1, vec3 x2, float margin, out vec3 qb, out vec3 qn, out vec3 qp, out float qphi) {
   // Bounding sphere and cull (faceSphere, queryFace).
   precise const vec3 middle = ((x0 + x1) + x2) / 3.0;
   precise const float r2 = max(max(dot3(x0 - middle, x0 - middle), dot3(x1 - middle, x1 - middle)),
@@ -286,17 +283,17 @@ void main() {
   vec3 gradC;
   const float phiC = sdf(middle, gradC);
 #if DRAPE_CONVEX
-  if (phiC > radius + thickness) return;
+  if (phiC > radius + margin) return false;
 #else
-  if (phiC > DRAPE_GRID_LIPSCHITZ * radius + thickness) return;  // a grid field is steeper than a distance
+  if (phiC > DRAPE_GRID_LIPSCHITZ * radius + margin) return false;  // a grid field is steeper than a distance
 #endif
 
-  vec3 qb = vec3(1.0 / 3.0), qn = gradC, qp = middle;
-  float qphi = phiC;
+  qb = vec3(1.0 / 3.0), qn = gradC, qp = middle;
+  qphi = phiC;
   int evaluations = 1;
   precise const vec3 e1 = x1 - x0, e2 = x2 - x0;
 #if DRAPE_CONVEX
-  // The cutting-plane search (deepestPointOnFace) with floor = thickness.
+  // The cutting-plane search (deepestPointOnFace) with floor = margin.
   precise const vec3 e3 = x2 - x1;
   const float extent = max(max(length3(e1), length3(e2)), length3(e3));
   precise const float tolerance = kGap * extent;
@@ -309,7 +306,7 @@ void main() {
   vec3 nextB = vec3(corner == 0 ? 1.0 : 0.0, corner == 1 ? 1.0 : 0.0, corner == 2 ? 1.0 : 0.0);
   float lower = model;
   bool exact = true;
-  precise const float stopAt = thickness + tolerance;
+  precise const float stopAt = margin + tolerance;
   while (evaluations < maxIterations && qphi - lower > tolerance && lower < stopAt) {
     precise const vec3 bb = nextB / (nextB.x + (nextB.y + nextB.z));  // Eigen sums the last two first
     precise const vec3 p = (x0 + bb.y * e1) + bb.z * e2;
@@ -366,11 +363,11 @@ void main() {
   }
 #else
   // Branch and bound over the face (branchAndBoundOnFace and Sdf<MeshShape>::deepestPointOnFace) with
-  // floor = thickness: sub-triangles split in four, depth first, lowest bound first.
+  // floor = margin: sub-triangles split in four, depth first, lowest bound first.
   const vec3 u0 = gridCells(x0), u1 = gridCells(x1), u2 = gridCells(x2);
   const float extent = max(max(length3(x1 - x0), length3(x2 - x0)), length3(x2 - x1));
   precise const float tolerance = DRAPE_FACE_SEARCH_GAP * extent;
-  precise const float stopAt = thickness + tolerance;
+  precise const float stopAt = margin + tolerance;
   precise const vec3 ue1 = u1 - u0, ue2 = u2 - u0;
   float value = phiC;
   vec3 best = vec3(1.0 / 3.0);
@@ -438,6 +435,100 @@ void main() {
     ++evaluations;
   }
 #endif
+  return true;
+}
+
+// The face moving from corners (a0, a1, a2) to (b0, b1, b2) (sweepFace in include/drape/collision/sweep.hpp): the
+// first time `when` it comes within the thickness of the solid, and its deepest point then. Conservative advancement
+// with the bounding sphere's lower bound where it clears the thickness, else the face search's.
+bool sweepFace(vec3 a0, vec3 a1, vec3 a2, vec3 b0, vec3 b1, vec3 b2, out vec3 qb, out vec3 qn, out vec3 qp,
+               out float qphi, out float when) {
+  precise const vec3 d0 = b0 - a0, d1 = b1 - a1, d2 = b2 - a2;
+  const float travel = sqrt(max(max(dot3(d0, d0), dot3(d1, d1)), dot3(d2, d2)));
+  precise const float stride = DRAPE_LIPSCHITZ * travel;
+  precise const float halfThickness = 0.5 * thickness;
+  float t = 0.0;
+  when = 0.0;
+  for (int step = 0; step < DRAPE_FACE_SWEEP_STEPS; ++step) {
+    precise const vec3 y0 = a0 + t * d0, y1 = a1 + t * d1, y2 = a2 + t * d2;
+    precise const vec3 middle = ((y0 + y1) + y2) / 3.0;
+    precise const float r2 = max(max(dot3(y0 - middle, y0 - middle), dot3(y1 - middle, y1 - middle)),
+                                 dot3(y2 - middle, y2 - middle));
+    const float radius = sqrt(r2);
+    vec3 gradient;
+    precise const float lower = sdf(middle, gradient) - DRAPE_LIPSCHITZ * radius;
+    if (lower >= thickness) {
+      precise const float advance = (lower - halfThickness) / stride;
+      t = t + advance;
+    } else {
+      vec3 fb, fn, fp;
+      float fphi;
+      if (searchFace(y0, y1, y2, thickness, fb, fn, fp, fphi) && fphi < thickness) {
+        qb = fb, qn = fn, qp = fp, qphi = fphi, when = t;
+        return t > 0.0 || fphi >= 0.0;
+      }
+      precise const float advance = halfThickness / stride;
+      t = t + advance;
+    }
+    if (!(t < 1.0)) break;
+  }
+  return false;
+}
+
+void main() {
+  if (gl_GlobalInvocationID.x >= count) return;
+  const uvec4 t = faces[first + gl_GlobalInvocationID.x];
+  vec4 a = x[t.x], b = x[t.y], c = x[t.z];
+  precise const vec3 low = boxLow - vec3(thickness), high = boxHigh + vec3(thickness);
+  if (sweep.y > 0.0) {
+    // Continuous contact: a face whose corners travelled further than the gate relative to the solid is searched
+    // along its path first; from its first contact on, no corner goes further against the contact normal than it
+    // was then.
+    vec3 from[3], to[3];
+    for (int k = 0; k < 3; ++k) {
+      const vec3 s0 = starts[t[k]].xyz;
+      precise const vec3 f = s0 + sweep.x * solidVelocityAt(s0, centre, linearVelocity, angularVelocity);
+      from[k] = f;
+    }
+    to[0] = a.xyz, to[1] = b.xyz, to[2] = c.xyz;
+    precise const vec3 d0 = to[0] - from[0], d1 = to[1] - from[1], d2 = to[2] - from[2];
+    const bool far = max(max(dot3(d0, d0), dot3(d1, d1)), dot3(d2, d2)) > sweep.y;
+    const vec3 pathLow = min(min(min(from[0], from[1]), min(from[2], to[0])), min(to[1], to[2]));
+    const vec3 pathHigh = max(max(max(from[0], from[1]), max(from[2], to[0])), max(to[1], to[2]));
+    vec3 hb, hn, hp;
+    float hphi, when;
+    if (far && all(greaterThanEqual(pathHigh, low)) && all(lessThanEqual(pathLow, high)) &&
+        sweepFace(from[0], from[1], from[2], to[0], to[1], to[2], hb, hn, hp, hphi, when)) {
+      const float w[3] = float[3](a.w, b.w, c.w);
+      for (int k = 0; k < 3; ++k) {
+        if (w[k] == 0.0) continue;
+        precise const vec3 then = from[k] + when * (to[k] - from[k]);
+        precise const float dn = dot3(hn, then - to[k]);
+        if (!(dn > 0.0)) continue;
+        const uint vi = t[k];
+        precise const vec3 moved = to[k] + dn * hn;
+        x[vi] = vec4(moved, w[k]);
+        Contact ct = contacts[vi];
+        const vec3 vc = solidVelocityAt(moved, centre, linearVelocity, angularVelocity);
+#if DRAPE_BODY
+        lineRecord = lines[vi];
+        recordContact(ct, moved, hn, dn, vc, friction, body, momentAbout(moved, centre, hn));
+        lines[vi] = lineRecord;
+#else
+        recordContact(ct, moved, hn, dn, vc, friction, body, vec3(0.0));
+#endif
+        contacts[vi] = ct;
+      }
+      a = x[t.x], b = x[t.y], c = x[t.z];
+    }
+  }
+  const vec3 x0 = a.xyz, x1 = b.xyz, x2 = c.xyz;
+  // A face whose box misses the solid's box grown by the thickness has no point within the thickness of it
+  // (projectFaceContactsAs with kBoxed): culled before any field evaluation.
+  if (!(all(greaterThanEqual(max(max(x0, x1), x2), low)) && all(lessThanEqual(min(min(x0, x1), x2), high)))) return;
+  vec3 qb, qn, qp;
+  float qphi;
+  if (!searchFace(x0, x1, x2, thickness, qb, qn, qp, qphi)) return;
   if (qphi >= thickness) return;
 
   // Move the face's vertices (projectFaceContactsAs).

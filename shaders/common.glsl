@@ -535,3 +535,9 @@ float sdf(vec3 x, out vec3 gradient) {
 #else
 #define DRAPE_CONVEX 1
 #endif
+// The field's Lipschitz constant (lipschitzOf): a grid's is stated, every other field is a distance.
+#if DRAPE_CONVEX
+#define DRAPE_LIPSCHITZ 1.0
+#else
+#define DRAPE_LIPSCHITZ DRAPE_GRID_LIPSCHITZ
+#endif

@@ -58,4 +58,6 @@ TEST_CASE("every shared constant reaches the shaders as the float the CPU kernel
   CHECK(defined(p, "DRAPE_MAX_CUTS") == std::to_string(c::kMaxCuts));
   CHECK(defined(p, "DRAPE_GRID_SEARCH_DEPTH") == std::to_string(c::kGridSearchDepth));
   CHECK(defined(p, "DRAPE_GRID_SEARCH_BUDGET") == std::to_string(c::kGridSearchBudget));
+  CHECK(defined(p, "DRAPE_SWEEP_STEPS") == std::to_string(c::kSweepSteps));
+  CHECK(defined(p, "DRAPE_FACE_SWEEP_STEPS") == std::to_string(c::kFaceSweepSteps));
 }

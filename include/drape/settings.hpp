@@ -98,7 +98,7 @@ struct Settings {
   /// relative to a bounded solid (any but the plane) in a substep, its path is searched for the first place it
   /// came within the thickness, so a fast cloth or few substeps cannot carry it through a thin solid. Costs
   /// nothing where nothing moves that fast. Applies to the faces and vertices methods, not to the in-solve
-  /// baseline. CPU only for now: the GPU solver refuses it.
+  /// baseline.
   bool continuousContact = false;
   /// Contacts with bounded solids (every shape but the plane) go through a uniform grid of the cloth's vertices,
   /// rebuilt once they have moved half a cell from where it binned them, so each such solid costs in proportion to the cloth near it rather than to the whole

@@ -44,7 +44,7 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_flag("--ridge", c.ridge,
                "a ridge in place of the slope: a box turned 45 deg about x, one edge on top at height 0 (--angle unused)");
-  app.add_flag("--continuous", c.base.continuousContact, "continuous contact: search each substep's paths (CPU only)");
+  app.add_flag("--continuous", c.base.continuousContact, "continuous contact: search each substep's paths for solids they crossed");
   app.add_option("--method", method, "collision method")->check(CLI::IsMember({"faces", "vertices", "in-solve"}))->capture_default_str();
   app.add_option("--scalar", scalar, "floating-point type")->check(CLI::IsMember({"float", "double"}))->capture_default_str();
   app.add_flag("--json", json, "print one JSON object on stdout");

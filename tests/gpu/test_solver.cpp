@@ -9,6 +9,7 @@
 
 #include <cstring>
 #include <memory>
+#include <tuple>
 #include <vector>
 
 namespace {
@@ -282,10 +283,6 @@ TEST_CASE("the GPU solver rejects bad settings and solids before changing anythi
   drape::Settings descent = parts.settings;
   descent.exactGridSearch = false;
   CHECK_THROWS_WITH(gpu.setSettings(descent), Catch::Contains("exactGridSearch"));
-  drape::Settings swept = parts.settings;
-  swept.continuousContact = true;
-  CHECK_THROWS_WITH(gpu.setSettings(swept), Catch::Contains("continuousContact"));
-  CHECK_FALSE(gpu.settings().continuousContact);
   CHECK_THROWS_WITH(drape::gpu::Solver(drape::test::gpuContext(), parts.asset, noCulling),
                     Catch::Contains("culling"));
   CHECK(gpu.settings().culling);
@@ -369,4 +366,58 @@ TEST_CASE("pins with moving targets: the GPU solver follows the CPU solver", "[g
   CHECK_THROWS_WITH(gpu.setPinTarget(3, Eigen::Vector3d::Zero()), Catch::Contains("pin index 3"));
   CHECK_THROWS_WITH(gpu.attach(0, Eigen::Vector3d(std::nan(""), 0, 0)), Catch::Contains("not finite"));
   CHECK(gpu.pins().size() == 3);
+}
+
+TEST_CASE("continuous contact on the GPU: thin rods stop the cloth as on the CPU", "[gpu]") {
+  // The CPU's [continuous] scenes, on the GPU solver. Without continuous contact the cloth passes both rods.
+  drape::Solid<drape::Capsule> rod;
+  rod.shape.radius = 0.003;
+  rod.pose.rotation = Eigen::AngleAxisd(0.5 * EIGEN_PI, Eigen::Vector3d::UnitX());  // along y
+  rod.staticFriction = rod.dynamicFriction = 0.5;
+  auto run = [&](int n, double z, int substeps, int frames, bool continuous) {
+    drape::SheetDesc g;
+    g.nx = g.ny = n;
+    g.spacing = 0.02;
+    g.placement.position = {0, 0, z};
+    const auto asset = std::make_shared<const drape::ClothAsset<float>>(drape::ClothAsset<float>::sheet(g));
+    drape::Settings settings;
+    settings.subStepCount = substeps;
+    settings.continuousContact = continuous;
+    drape::gpu::Solver gpu(drape::test::gpuContext(), asset, settings);
+    gpu.addSolid(rod);
+    double lowestMean = 1e9, depth = 0, mean = 0;
+    for (int f = 0; f < frames; ++f) {
+      gpu.step(1.0 / 60.0);
+      mean = 0;
+      for (Index i = 0; i < gpu.vertexCount(); ++i) mean += gpu.position(i).z() / double(gpu.vertexCount());
+      lowestMean = std::min(lowestMean, mean);
+      depth = std::max(depth, drape::penetration(gpu).depth);
+    }
+    return std::tuple{lowestMean, depth, mean};
+  };
+  SECTION("dropped from 10 cm on a 3 mm rod at 2 substeps") {
+    rod.shape.halfHeight = 0.5;
+    const auto [on, depth, end] = run(40, 0.1, 2, 60, true);
+    const double off = std::get<0>(run(40, 0.1, 2, 60, false));
+    std::printf("[gpu continuous] rod drop: lowest mean height %.4g m, deepest point in the rod %.3g m; without %.4g m\n",
+                on, depth, off);
+    CHECK(on > -0.3);
+    CHECK(depth == 0);
+    CHECK(off < -1);
+  }
+  SECTION("a kinematic 3 mm rod rising at 10 m/s into the cloth") {
+    rod.shape.halfHeight = 0.3;
+    rod.motion = drape::Motion::Kinematic;
+    rod.pose.position = {0, 0, -0.05};
+    rod.linearVelocity = {0, 0, 10};
+    const double rodZ = -0.05 + 10 * 3 / 60.0;
+    const auto [lowest, depth, on] = run(16, 0.0, 10, 3, true);
+    const double off = std::get<2>(run(16, 0.0, 10, 3, false));
+    std::printf("[gpu continuous] rising rod: mean height at the end %.4g m (the rod's axis at %.3g m), deepest "
+                "point in the rod %.3g m; without %.4g m\n",
+                on, rodZ, depth, off);
+    CHECK(on > rodZ - 0.15);  // carried, hanging from the rod
+    CHECK(depth == 0);
+    CHECK(off < rodZ - 0.3);  // left behind
+  }
 }

@@ -75,6 +75,7 @@ enum Uniform : int {
   kEstimator = 24,      ///< int: the contact-force estimator (0 sub-force, 1 energy, 2 impulse)
   kNormalOnly = 25,     ///< uint: 1 to pass bodies only the normal part of each push
   kPropagated = 26,     ///< uint: 1 to pass on the impulse propagation gave vertices not in contact
+  kSweep = 27,          ///< vec2: continuous contact's substep h (s) and gate squared (m^2); 0 is off
   kBoxLow = 28,         ///< vec3: the solid's bounding box (the cloth's local frame), outside which phi is at least
   kBoxHigh = 29,        ///<   the distance to the box (placeBounds); +-FLT_MAX for an unbounded solid
   kShape = 32,  ///< vec4[5] (locations 32-36): the solid's field, packed by packShape (gpu/shapes.hpp)
@@ -250,6 +251,7 @@ inline std::string preamble(const std::string& defines = {}) {
   s += define("DRAPE_U_SLACK", kSlack);
   s += define("DRAPE_U_PASS", kPass);
   s += define("DRAPE_U_FRESH", kFresh);
+  s += define("DRAPE_U_SWEEP", kSweep);
   s += define("DRAPE_CONTACT_SLOTS", kContactSlots);
   // drape/kernel_constants.hpp, rounded to float as the kernels use them.
   s += define("DRAPE_MERGE_COS", constants::kMergeCos);
@@ -265,6 +267,8 @@ inline std::string preamble(const std::string& defines = {}) {
   s += define("DRAPE_GRID_SEARCH_DEPTH", constants::kGridSearchDepth);
   s += define("DRAPE_GRID_SEARCH_BUDGET", constants::kGridSearchBudget);
   s += define("DRAPE_GRID_LIPSCHITZ", constants::kGridLipschitz);
+  s += define("DRAPE_SWEEP_STEPS", constants::kSweepSteps);
+  s += define("DRAPE_FACE_SWEEP_STEPS", constants::kFaceSweepSteps);
   s += define("DRAPE_PINCH_RATE", constants::kPinchRate);
   s += define("DRAPE_PINCH_OPPOSING_COS", constants::kPinchOpposingCos);
   s += define("DRAPE_LINE_MIN_ALONG", constants::kLineMinAlong);

@@ -63,6 +63,7 @@ class Program {
 
   void set(layout::Uniform u, unsigned value) const { glProgramUniform1ui(id_, u, value); }
   void set(layout::Uniform u, float value) const { glProgramUniform1f(id_, u, value); }
+  void set(layout::Uniform u, float x, float y) const { glProgramUniform2f(id_, u, x, y); }
   void set(layout::Uniform u, float x, float y, float z) const { glProgramUniform3f(id_, u, x, y, z); }
 
   /// Runs the kernel over `items` invocations (whole workgroups; each kernel skips those past its count).

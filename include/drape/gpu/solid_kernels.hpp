@@ -113,9 +113,12 @@ class SolidKernels {
 
   /// One solid's vertex pass (projectVertexContacts): `fresh` for the substep's first, which starts every
   /// record; `pass` the settle pass (-1: the first pass), `slack` what the settle passes leave alone.
-  void vertexPass(const SolidPass& p, float thickness, unsigned vertexCount, bool fresh, int pass, float slack) const {
+  /// `sweep`: continuous contact's substep and gate squared, (0, 0) for none (a settle pass, or the setting off).
+  void vertexPass(const SolidPass& p, float thickness, unsigned vertexCount, bool fresh, int pass, float slack,
+                  const Eigen::Vector2f& sweep = Eigen::Vector2f::Zero()) const {
     const Program& k = p.motion.body >= 0 ? kernels_[p.code].verticesBody : kernels_[p.code].vertices;
     setUniforms(k, p, thickness);
+    k.set(layout::kSweep, sweep.x(), sweep.y());
     k.set(layout::kCount, vertexCount);
     k.set(layout::kSlack, slack);
     glProgramUniform1i(k.id(), layout::kPass, pass);
@@ -124,10 +127,11 @@ class SolidKernels {
   }
 
   /// One curved solid's face pass (projectFaceContacts), colour by colour.
-  void facePass(const SolidPass& p, float thickness, int pgdIterations,
-                const std::vector<std::size_t>& colourOffsets) const {
+  void facePass(const SolidPass& p, float thickness, int pgdIterations, const std::vector<std::size_t>& colourOffsets,
+                const Eigen::Vector2f& sweep = Eigen::Vector2f::Zero()) const {
     const Program& k = p.motion.body >= 0 ? kernels_[p.code].facesBody : kernels_[p.code].faces;
     setUniforms(k, p, thickness);
+    k.set(layout::kSweep, sweep.x(), sweep.y());
     glProgramUniform1i(k.id(), layout::kPgdIterations, pgdIterations);
     for (std::size_t c = 0; c + 1 < colourOffsets.size(); ++c) {
       const std::size_t count = colourOffsets[c + 1] - colourOffsets[c];

@@ -163,8 +163,6 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
     drape::detail::require(s.culling, "the GPU solver always culls faces: Settings::culling = false is not supported");
     drape::detail::require(s.exactGridSearch, "the GPU solver runs the exact face search on grid fields: "
                                               "Settings::exactGridSearch = false is not supported");
-    drape::detail::require(!s.continuousContact, "the GPU solver has no continuous contact yet: "
-                                                 "Settings::continuousContact = true is not supported");
     drape::detail::require(s.broadPhase,
                            "the GPU solver always culls by bounding box: Settings::broadPhase = false is not supported");
     drape::detail::require(s.threadCount == 1, [&] {
@@ -212,6 +210,7 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
     repulsive_ = has.repulsion;
     reconcile_ = has.reconcile;
     coupled_ = has.coupled;
+    sweep_ = settings_.continuousContact && settings_.collisionMethod != CollisionMethod::InSolve && has.bounded > 0;
     if (coupled_) coupling_.reserve(state_.x.size(), bodies_.size());  // the coupling's buffers, once it has a body
   }
 
@@ -235,15 +234,20 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
   /// All contacts of a substep (projectAll, as on the CPU): per solid the vertex pass, then (a curved solid, when
   /// `faces`) the face pass; where surfaces meet, the placement outside all of a vertex's contact planes and,
   /// with several solids, the settle passes. The faces' buffer is bound here.
-  void projectAll(bool faces) {
+  /// `h`: the substep, for continuous contact (0 for none: the in-solve method's contacts).
+  void projectAll(bool faces, float h = 0.0f) {
     faces = faces && settings_.collisionMethod != CollisionMethod::Vertices;
     if (faces) faces_.bind(layout::kFaces);
     const float thickness = float(settings_.thickness);
     const auto n = unsigned(vertexCount());
+    const float gate = float(constants::kSweepGate) * thickness;
     for (std::size_t k = 0; k < passes_.size(); ++k) {
-      kernels_.vertexPass(passes_[k], thickness, n, k == 0, -1, 0.0f);
+      // Continuous contact sweeps bounded solids only (a half-space has no far side), as on the CPU.
+      const Eigen::Vector2f sweep =
+          sweep_ && h > 0.0f && passes_[k].curved ? Eigen::Vector2f(h, gate * gate) : Eigen::Vector2f::Zero();
+      kernels_.vertexPass(passes_[k], thickness, n, k == 0, -1, 0.0f, sweep);
       if (faces && passes_[k].curved)
-        kernels_.facePass(passes_[k], thickness, settings_.pgdIterations, faceColourOffsets_);
+        kernels_.facePass(passes_[k], thickness, settings_.pgdIterations, faceColourOffsets_, sweep);
     }
     if (!reconcile_) return;
     settle(-1);
@@ -294,7 +298,7 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
     //    split; propagate (as on the CPU). The in-solve method collided inside the solve instead.
     if (coupled_) coupling_.keepPreContactVelocities(velocities_, state_.x.size());
     if (!passes_.empty() && !inSolve) {
-      projectAll(true);
+      projectAll(true, h);
       respondAndPropagate(h);
     }
     // 5. the cloth's push on the coupled bodies, applied before they move (docs/design.md §6)
@@ -336,7 +340,7 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
     predict_.set(layout::kCount, n);
     predict_.set(layout::kStep, h);
     predict_.set(layout::kGravityStep, gh.x(), gh.y(), gh.z());
-    predict_.set(layout::kKeepStart, unsigned(friction_ || coupled_));
+    predict_.set(layout::kKeepStart, unsigned(friction_ || coupled_ || sweep_));
     predict_.dispatch(n);
   }
 
@@ -450,6 +454,7 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
   SolidKernels kernels_;  ///< each shape type's kernels, and the solids' shape data
   Buffer<std::uint32_t> flags_;   ///< per settle pass: whether its vertex passes found a contact
   bool coupled_ = false;          ///< some solid is a dynamic body this substep
+  bool sweep_ = false;            ///< continuous contact this substep (the setting, and a bounded solid)
   BodyCoupling coupling_;  ///< the coupling's kernels, and its buffers once a scene has a dynamic solid
   Program predict_, solve_, update_, respond_, respondFriction_, propagate_, centre_, translate_, pinKernel_, settle_,
       frictionKernel_;
