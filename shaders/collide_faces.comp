@@ -512,7 +512,7 @@ void main() {
         const vec3 vc = solidVelocityAt(moved, centre, linearVelocity, angularVelocity);
 #if DRAPE_BODY
         lineRecord = lines[vi];
-        recordContact(ct, moved, hn, dn, vc, friction, body, momentAbout(moved, centre, hn));
+        recordContact(ct, moved, hn, dn, vc, friction, body, momentAbout(hp, centre, hn));
         lines[vi] = lineRecord;
 #else
         recordContact(ct, moved, hn, dn, vc, friction, body, vec3(0.0));

@@ -83,7 +83,8 @@ void main() {
           x[i] = xi;
           c = fresh != 0u ? emptyContact() : contacts[i];
           const vec3 vc = solidVelocityAt(p, centre, linearVelocity, angularVelocity);
-          recordContact(c, p, n, dn, vc, friction, body, momentAbout(p, centre, n));
+          // A coupled body's push acts on the line through the point where the path met the solid.
+          recordContact(c, p, n, dn, vc, friction, body, momentAbout(q, centre, n));
           found = true;
         }
       }

@@ -122,11 +122,14 @@ TEMPLATE_TEST_CASE("normal contact forces pass through a ball's centre: a spinni
   // passed on: such a contact can only push along its normal, so what else the vertex's change holds (its slot's
   // merged normals, propagation from neighbours facing other ways) is not passed to the body. Passed on, it
   // changed this ball's spin by 4.3 rad/s (impulse; energy 5.4), and spun a ball dropped centred into a hammock
-  // up to 18 rad/s.
+  // up to 18 rad/s. With continuous contact, a swept contact acts on the line through the point where its path
+  // first met the ball.
+  for (const bool continuous : {false, true})
   for (const bool normalOnly : {true, false})
   for (const drape::ContactForce estimator :
        {drape::ContactForce::Impulse, drape::ContactForce::Energy, drape::ContactForce::SubForce}) {
     drape::Settings settings;
+    settings.continuousContact = continuous;
     settings.gravity.setZero();
     settings.contactForce = estimator;
     settings.normalForceOnly = normalOnly;
@@ -146,7 +149,7 @@ TEMPLATE_TEST_CASE("normal contact forces pass through a ball's centre: a spinni
     const Eigen::Vector3d dw = world.body(b).angularVelocity() - ball.angularVelocity;
     INFO(drape::toString(estimator) << (normalOnly ? ", normal forces only" : ", frictionless contacts")
                                     << ": velocity change " << dv.transpose() << " m/s, spin change "
-                                    << dw.transpose() << " rad/s");
+                                    << dw.transpose() << " rad/s" << (continuous ? ", continuous contact" : ""));
     CHECK(dv.z() > 0.5);  // the cloth stopped the fall or threw the ball back
     // Float: the contact point and the normal are rounded (about 1e-7 relative) before the torque is taken.
     CHECK(dw.norm() <= (std::is_same_v<S, float> ? 1e-5 : 1e-12) * ball.angularVelocity.norm());

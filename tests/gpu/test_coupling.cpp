@@ -133,7 +133,9 @@ TEST_CASE("coupling on the GPU: normal forces pass through a ball's centre, so a
   // contact_forces.comp): on a ball every line passes through the centre the field had.
   const drape::ContactForce estimator =
       GENERATE(drape::ContactForce::Impulse, drape::ContactForce::Energy, drape::ContactForce::SubForce);
+  const bool continuous = GENERATE(false, true);  // a swept contact's line runs through where its path met the ball
   drape::Settings settings;
+  settings.continuousContact = continuous;
   settings.gravity.setZero();
   settings.contactForce = estimator;
   settings.normalForceOnly = true;
@@ -152,7 +154,7 @@ TEST_CASE("coupling on the GPU: normal forces pass through a ball's centre, so a
   const Eigen::Vector3d dv = world.body(b).linearVelocity() - ball.linearVelocity;
   const Eigen::Vector3d dw = world.body(b).angularVelocity() - ball.angularVelocity;
   INFO(drape::toString(estimator) << ": velocity change " << dv.transpose() << " m/s, spin change " << dw.transpose()
-                                  << " rad/s");
+                                  << " rad/s" << (continuous ? ", continuous contact" : ""));
   CHECK(dv.z() > 0.5);  // the cloth stopped the fall or threw the ball back
   CHECK(dw.norm() <= 1e-5 * ball.angularVelocity.norm());  // the CPU's float bound
 }

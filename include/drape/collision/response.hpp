@@ -109,7 +109,7 @@ template <Scalar S> struct ContactBuffer {
 
   /// Records that vertex i was placed at x, dn along n, out of a solid moving with m (its velocity there is the
   /// slot's solidVelocity); `anchor` is the placed point the contact was found at (x itself for a vertex contact,
-  /// the face's deepest point for a face contact). kBody: the solid is a coupled body (m.body >= 0), whose slots
+  /// the face's deepest point for a face contact, the point where a swept path met the solid). kBody: the solid is a coupled body (m.body >= 0), whose slots
   /// keep a ContactLine; other solids' contacts write none, so a scene without bodies does not pay for them. A
   /// vertex's first contact of the substep (nearly every one) takes the inlined path; further ones merge in
   /// recordMore.
@@ -240,7 +240,8 @@ VertexPassShare<S> projectVertexContactsAs(Index begin, Index end, const Compile
         if (hit.hit && beyond < thickness) {
           const S dn = thickness - beyond;
           x[i] += dn * hit.normal;
-          contacts.template record<kBody>(i, x[i], hit.normal, dn, solid.motion, x[i]);
+          // A coupled body's push acts on the line through the point where the path met the solid.
+          contacts.template record<kBody>(i, x[i], hit.normal, dn, solid.motion, hit.point);
           moved = std::max(moved, (x[i] - binned[i]).squaredNorm());
           ++share.sweptFound;
         }
@@ -327,7 +328,7 @@ S projectFaceContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, int p
               const S dn = n.dot(from[k] + when * (to[k] - from[k]) - x[t[k]]);
               if (!(dn > S(0))) continue;
               x[t[k]] += dn * n;
-              contacts.template record<kBody>(t[k], x[t[k]], n, dn, solid.motion, x[t[k]]);
+              contacts.template record<kBody>(t[k], x[t[k]], n, dn, solid.motion, hit.point);
               moved = std::max(moved, (x[t[k]] - binned[t[k]]).squaredNorm());
               any = true;
             }
