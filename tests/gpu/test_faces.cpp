@@ -47,6 +47,19 @@ TEST_CASE("face colours share no vertex and hold every face once", "[gpu]") {
 
 namespace {
 
+/// The asset's indices of colour c's faces, in the colour's order (the CPU's reference visits them so).
+std::vector<Index> colourFaceIds(const drape::ClothAsset<float>& asset, const drape::gpu::FaceColours& coloured,
+                                 std::size_t c) {
+  std::vector<Index> ids;
+  for (std::size_t f = coloured.offsets[c]; f < coloured.offsets[c + 1]; ++f)
+    for (Index t = 0; t < asset.faceCount(); ++t)
+      if (std::uint32_t(asset.triangles[std::size_t(t)][0]) == coloured.faces[f][0] &&
+          std::uint32_t(asset.triangles[std::size_t(t)][1]) == coloured.faces[f][1] &&
+          std::uint32_t(asset.triangles[std::size_t(t)][2]) == coloured.faces[f][2])
+        ids.push_back(t);
+  return ids;
+}
+
 /// The face pass of one solid over a flat 30 x 30 cloth (2 cm spacing, some vertices fixed), GPU against CPU:
 /// `place(origin)` gives the solid, poking into the cloth, whose local origin is `origin`.
 template <class Shape, class Place>
@@ -72,13 +85,7 @@ void compareFacePass(Place&& place, float normalTolerance = 1e-6f, float depthTo
   drape::CollisionStats stats;
   std::int64_t searched = 0;
   for (std::size_t c = 0; c + 1 < coloured.offsets.size(); ++c) {
-    std::vector<Index> ids;
-    for (std::size_t f = coloured.offsets[c]; f < coloured.offsets[c + 1]; ++f)
-      for (Index t = 0; t < asset.faceCount(); ++t)
-        if (std::uint32_t(asset.triangles[std::size_t(t)][0]) == coloured.faces[f][0] &&
-            std::uint32_t(asset.triangles[std::size_t(t)][1]) == coloured.faces[f][1] &&
-            std::uint32_t(asset.triangles[std::size_t(t)][2]) == coloured.faces[f][2])
-          ids.push_back(t);
+    const std::vector<Index> ids = colourFaceIds(asset, coloured, c);
     drape::projectFaceContacts<true>(solid, thickness, iterations, asset.triangles, drape::ItemList{ids.data()},
                                      Index(ids.size()), x.data(), state.invMass.data(), contacts, stats, x.data());
   }
@@ -257,13 +264,7 @@ template <class Shape, class Place> void compareSweptPasses(Place&& place, doubl
                                                         state.invMass.data(), drape::AllItems{}, contacts, x.data(),
                                                         0.0f, sweep);
   for (std::size_t c = 0; c + 1 < coloured.offsets.size(); ++c) {
-    std::vector<Index> ids;
-    for (std::size_t f = coloured.offsets[c]; f < coloured.offsets[c + 1]; ++f)
-      for (Index t = 0; t < asset.faceCount(); ++t)
-        if (std::uint32_t(asset.triangles[std::size_t(t)][0]) == coloured.faces[f][0] &&
-            std::uint32_t(asset.triangles[std::size_t(t)][1]) == coloured.faces[f][1] &&
-            std::uint32_t(asset.triangles[std::size_t(t)][2]) == coloured.faces[f][2])
-          ids.push_back(t);
+    const std::vector<Index> ids = colourFaceIds(asset, coloured, c);
     drape::projectFaceContacts<true, false, true>(solid, thickness, iterations, asset.triangles,
                                                   drape::ItemList{ids.data()}, Index(ids.size()), x.data(),
                                                   state.invMass.data(), contacts, stats, x.data(), true, sweep);
