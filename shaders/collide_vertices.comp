@@ -60,9 +60,6 @@ void main() {
   vec4 xi = x[i];
   bool found = false;
   Contact c;
-#if DRAPE_BODY
-  lineRecord = lines[i];
-#endif
   // Outside the solid's box grown by the thickness, phi is beyond the thickness: no field evaluation (what the
   // CPU's broad phase leaves out). A swept path is tested by its own box.
   precise const vec3 low = boxLow - vec3(thickness), high = boxHigh + vec3(thickness);
@@ -82,6 +79,9 @@ void main() {
           xi.xyz = p;
           x[i] = xi;
           c = fresh != 0u ? emptyContact() : contacts[i];
+#if DRAPE_BODY
+          lineRecord = lines[i];  // read only for a vertex that records a contact
+#endif
           const vec3 vc = solidVelocityAt(p, centre, linearVelocity, angularVelocity);
           // A coupled body's push acts on the line through the point where the path met the solid.
           recordContact(c, p, n, dn, vc, friction, body, momentAbout(q, centre, n));
@@ -99,7 +99,12 @@ void main() {
       precise const float dn = thickness - phi;
       precise const vec3 p = xi.xyz + dn * n;
       x[i] = vec4(p, xi.w);
-      if (!found) c = fresh != 0u ? emptyContact() : contacts[i];
+      if (!found) {
+        c = fresh != 0u ? emptyContact() : contacts[i];
+#if DRAPE_BODY
+        lineRecord = lines[i];
+#endif
+      }
       const vec3 vc = solidVelocityAt(p, centre, linearVelocity, angularVelocity);
       recordContact(c, p, n, dn, vc, friction, body, momentAbout(p, centre, n));
       found = true;
