@@ -509,7 +509,7 @@ void main() {
         precise const vec3 moved = to[k] + dn * hn;
         x[vi] = vec4(moved, w[k]);
         Contact ct = contacts[vi];
-        const vec3 vc = solidVelocityAt(moved, centre, linearVelocity, angularVelocity);
+        const vec3 vc = solidContactVelocity(moved, hn, hp, centre, linearVelocity, angularVelocity);
 #if DRAPE_BODY
         lineRecord = lines[vi];
         recordContact(ct, moved, hn, dn, vc, friction, body, momentAbout(hp, centre, hn));
@@ -545,7 +545,7 @@ void main() {
     precise const vec3 moved = xv.xyz + dn * qn;
     x[vi] = vec4(moved, xv.w);
     Contact ct = contacts[vi];
-    const vec3 vc = solidVelocityAt(moved, centre, linearVelocity, angularVelocity);
+    const vec3 vc = solidContactVelocity(moved, qn, placed, centre, linearVelocity, angularVelocity);
 #if DRAPE_BODY
     lineRecord = lines[vi];
     recordContact(ct, moved, qn, dn, vc, friction, body, momentAbout(placed, centre, qn));

@@ -82,7 +82,7 @@ void main() {
 #if DRAPE_BODY
           lineRecord = lines[i];  // read only for a vertex that records a contact
 #endif
-          const vec3 vc = solidVelocityAt(p, centre, linearVelocity, angularVelocity);
+          const vec3 vc = solidContactVelocity(p, n, q, centre, linearVelocity, angularVelocity);
           // A coupled body's push acts on the line through the point where the path met the solid.
           recordContact(c, p, n, dn, vc, friction, body, momentAbout(q, centre, n));
           found = true;

@@ -17,6 +17,17 @@ vec3 solidVelocityAt(vec3 x, vec3 centre, vec3 linear, vec3 angular) {
   return v;
 }
 
+// The solid's velocity a contact at x answers to, its surface point being anchor and its normal n: the material
+// velocity at x with the normal part of the surface's velocity at the anchor (SolidMotion::contactVelocityAt).
+vec3 solidContactVelocity(vec3 x, vec3 n, vec3 anchor, vec3 centre, vec3 linear, vec3 angular) {
+  precise vec3 d = anchor - x;
+  precise vec3 r = vec3(angular.y * d.z - angular.z * d.y, angular.z * d.x - angular.x * d.z,
+                        angular.x * d.y - angular.y * d.x);
+  precise const float s = dot3(n, r);
+  precise vec3 v = solidVelocityAt(x, centre, linear, angular) + s * n;
+  return v;
+}
+
 // Rows r0, r1, r2 of a rotation times v, and its transpose times v, as Eigen sums them.
 vec3 rotate(vec3 r0, vec3 r1, vec3 r2, vec3 v) { return vec3(dot3(r0, v), dot3(r1, v), dot3(r2, v)); }
 vec3 rotateBack(vec3 r0, vec3 r1, vec3 r2, vec3 v) {

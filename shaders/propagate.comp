@@ -1,7 +1,8 @@
 // docs/design.md §4, propagation (the CPU twin: propagateCorrections in include/drape/collision/response.hpp),
 // one dispatch per ring: a free vertex not in contact gathers from its neighbours in the ring before (ring 1: the
 // contact vertices that gained normal velocity) the mean of their corrections times the weight, along their
-// mean normal, and takes of it only what removes its own approach toward the solid. Each vertex writes only
+// mean normal, and takes of it only what removes its own approach toward the solid (relative to the solids'
+// speed along that normal). Each vertex writes only
 // itself, and gathers its neighbours in the asset's order, so the sums are the CPU's.
 layout(local_size_x = DRAPE_WORKGROUP) in;
 layout(std430, binding = DRAPE_B_VELOCITIES) buffer Velocities { vec4 v[]; };
@@ -19,8 +20,8 @@ void main() {
   if (j >= count) return;
   if (contacts[j].slots.x != 0u || x[j].w == 0.0) return;
   if (ring > 1u && rings[j].reached != 0u) return;  // settled in an earlier ring
-  precise vec3 normalSum = vec3(0.0), velocitySum = vec3(0.0);
-  precise float amountSum = 0.0;
+  precise vec3 normalSum = vec3(0.0);
+  precise float speedSum = 0.0, amountSum = 0.0;
   int found = 0;
   for (uint k = neighbourOffsets[j]; k < neighbourOffsets[j + 1u]; ++k) {
     const uint i = neighbours[k];
@@ -37,14 +38,15 @@ void main() {
         weighted = weighted + nk.w * nk.xyz;
       }
       precise const float len = length3(weighted);
-      normalSum = normalSum + (len > 0.0 ? weighted / len : contacts[i].normal[0].xyz);
-      velocitySum = velocitySum + contacts[i].velocity[0].xyz;
+      precise const vec3 ni = len > 0.0 ? weighted / len : contacts[i].normal[0].xyz;
+      normalSum = normalSum + ni;
+      speedSum = speedSum + dot3(ni, contacts[i].velocity[0].xyz);
       amountSum = amountSum + gained;
     } else {
       const Ring r = rings[i];
       if (r.reached != ring - 1u || r.amount <= 0.0) continue;
       normalSum = normalSum + r.normal.xyz;
-      velocitySum = velocitySum + r.velocity.xyz;
+      speedSum = speedSum + r.normal.w;
       amountSum = amountSum + r.amount;
     }
     ++found;
@@ -56,12 +58,11 @@ void main() {
   if (len <= 0.0) return;
   precise const float inv = 1.0 / float(found);
   precise const vec3 nj = normalSum / len;
-  precise const vec3 vc = velocitySum * inv;
+  precise const float vcn = speedSum / len;  // the solids' speed along nj (propagateRing)
   const vec3 vj = v[j].xyz;
-  precise const float approach = -dot3(nj, vj - vc);
+  precise const float approach = -(dot3(nj, vj) - vcn);
   precise const float give = weight * amountSum * inv;
   if (approach > 0.0) v[j] = vec4(vj + min(approach, give) * nj, 0.0);
   rings[j].amount = give;
-  rings[j].normal = vec4(nj, 0.0);
-  rings[j].velocity = vec4(vc, 0.0);
+  rings[j].normal = vec4(nj, vcn);
 }

@@ -119,7 +119,7 @@ template <Scalar S> struct ContactBuffer {
     if (stamp[i] != current) {
       stamp[i] = current;
       slotCount[i] = 1;
-      slots[i][0] = {n, m.velocityAt(x), dn, m.staticFriction, m.dynamicFriction, n.dot(x), m.body};
+      slots[i][0] = {n, m.contactVelocityAt(x, n, anchor), dn, m.staticFriction, m.dynamicFriction, n.dot(x), m.body};
       if constexpr (kBody) lines[i][0] = {n, (anchor - m.centre).cross(n)};
       return;
     }
@@ -129,7 +129,7 @@ template <Scalar S> struct ContactBuffer {
  private:
   template <bool kBody>
   void recordMore(Index i, const Vec3<S>& x, const Vec3<S>& n, S dn, const SolidMotion<S>& m, const Vec3<S>& anchor) {
-    const Vec3<S> vc = m.velocityAt(x);
+    const Vec3<S> vc = m.contactVelocityAt(x, n, anchor);
     auto& own = slots[i];
     int best = -1;
     S bestCos = kMergeCos;
@@ -549,15 +549,15 @@ void applyContactFriction(Index begin, Index end, const ContactBuffer<S>& contac
 template <Scalar S> struct PropagationBuffer {
   std::uint64_t pass = 0;
   std::vector<std::uint64_t> reach[2];
-  std::vector<Vec3<S>> normal, velocity;
-  std::vector<S> amount;
+  std::vector<Vec3<S>> normal;
+  std::vector<S> normalSpeed, amount;
 
   void resize(Index n) {
     pass = 0;
     reach[0].assign(n, 0);
     reach[1].assign(n, 0);
     normal.resize(n);
-    velocity.resize(n);
+    normalSpeed.resize(n);
     amount.resize(n);
   }
   /// Starts a propagation: the rings of earlier ones no longer count as reached.
@@ -568,7 +568,7 @@ template <Scalar S> struct PropagationBuffer {
 
 /// Spreads the contacts' normal velocity corrections to the vertices around them (the SDF collision paper): ring r gets
 /// weight^r of the mean correction of its sources, along their mean normal, and only as much as removes its
-/// own approach toward the solid, so a neighbour is never pushed away (which would make the seam shake).
+/// own approach toward the solid (relative to the solids' normal speed there), so a neighbour is never pushed away (which would make the seam shake).
 /// Each vertex gathers from its neighbours in the ring before (the GPU kernel gathers the same way), so the
 /// sums have one order whatever the thread count. This is ring `ring` (1, 2, ...) for vertices [begin, end),
 /// after buf.beginPass(); ring r + 1 starts when every vertex is done with ring r.
@@ -582,20 +582,21 @@ void propagateRing(Index begin, Index end, int ring, const ContactBuffer<S>& con
   for (Index j = begin; j < end; ++j) {
     if (contacts.stamp[j] == mark || invMass[j] == S(0)) continue;
     if (ring > 1 && buf.reachedThisPass(j)) continue;  // settled in an earlier ring
-    Vec3<S> normalSum = Vec3<S>::Zero(), velocitySum = Vec3<S>::Zero();
-    S amountSum = 0;
+    Vec3<S> normalSum = Vec3<S>::Zero();
+    S speedSum = 0, amountSum = 0;
     int count = 0;
     for (const Index* it = neighbours.begin(j); it != neighbours.end(j); ++it) {
       const Index i = *it;
       if (ring == 1) {
         if (contacts.stamp[i] != mark || contacts.normalDv[i] <= S(0)) continue;
-        normalSum += contacts.normal(i);
-        velocitySum += contacts.solidVelocity(i);
+        const Vec3<S> ni = contacts.normal(i);
+        normalSum += ni;
+        speedSum += ni.dot(contacts.solidVelocity(i));
         amountSum += contacts.normalDv[i];
       } else {
         if (reachFrom[i] != from || buf.amount[i] <= S(0)) continue;
         normalSum += buf.normal[i];
-        velocitySum += buf.velocity[i];
+        speedSum += buf.normalSpeed[i];
         amountSum += buf.amount[i];
       }
       ++count;
@@ -607,14 +608,17 @@ void propagateRing(Index begin, Index end, int ring, const ContactBuffer<S>& con
     if (len <= S(0)) continue;
     const S inv = S(1) / S(count);
     const Vec3<S> nj = normalSum / len;
-    const Vec3<S> vc = velocitySum * inv;
-    const S approach = -nj.dot(v[j] - vc);
+    // The solids' speed along nj: each source's own normal speed, summed as nj sums their normals. A spinning
+    // solid's surface moves along itself, and its material velocity's tangential part, averaged over points
+    // with different normals, is not a speed toward the cloth.
+    const S vcn = speedSum / len;
+    const S approach = -(nj.dot(v[j]) - vcn);
     const S give = weight * amountSum * inv;
     if (approach > S(0)) v[j] += std::min(approach, give) * nj;
     // The next ring sees this ring's share, not what it happened to need.
     buf.amount[j] = give;
     buf.normal[j] = nj;
-    buf.velocity[j] = vc;
+    buf.normalSpeed[j] = vcn;
   }
 }
 

@@ -155,16 +155,15 @@ struct BodySum {
 static_assert(sizeof(BodySum) == 192 && offsetof(BodySum, exchangeForce) == 64 && offsetof(BodySum, pinchForce) == 128);
 
 /// What propagation ring `reached` passed to a vertex: the share it offers the next ring (amount, m/s), along
-/// the mean normal of its sources, relative to their mean solid velocity. reached is 0 before any ring.
+/// the mean normal of its sources (normal[0..2]), relative to the solids' speed along it (normal[3]). reached is
+/// 0 before any ring.
 struct Ring {
   float normal[4];
-  float velocity[4];
   float amount;
   std::uint32_t reached;
   std::uint32_t pad[2];
 };
-static_assert(sizeof(Ring) == 48 && offsetof(Ring, velocity) == 16 && offsetof(Ring, amount) == 32 &&
-              offsetof(Ring, reached) == 36);
+static_assert(sizeof(Ring) == 32 && offsetof(Ring, amount) == 16 && offsetof(Ring, reached) == 20);
 
 /// A pin: its vertex and its target (m, the cloth's local frame).
 struct PinSlot {
@@ -293,7 +292,7 @@ inline std::string preamble(const std::string& defines = {}) {
   s += "struct Constraint { uint a; uint b; float rest; uint pad; };\n";
   s += "struct Contact { vec4 normal[DRAPE_CONTACT_SLOTS]; vec4 velocity[DRAPE_CONTACT_SLOTS]; "
        "vec4 friction[DRAPE_CONTACT_SLOTS]; ivec4 body; uvec4 slots; vec4 normalDv; };\n";
-  s += "struct Ring { vec4 normal; vec4 velocity; float amount; uint reached; uint pad0; uint pad1; };\n";
+  s += "struct Ring { vec4 normal; float amount; uint reached; uint pad0; uint pad1; };\n";
   s += "struct PinSlot { vec3 target; uint vertex; };\n";
   s += "struct Lines { vec4 push[DRAPE_CONTACT_SLOTS]; vec4 moment[DRAPE_CONTACT_SLOTS]; };\n";
   s += "struct BodyPush { vec4 force; vec4 torque; int body; int kind; int pad0; int pad1; };\n";

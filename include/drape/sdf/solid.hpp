@@ -68,6 +68,17 @@ template <Scalar S> struct SolidMotion {
     return linearVelocity + Vec3<S>(w.y() * d.z() - w.z() * d.y(), w.z() * d.x() - w.x() * d.z(),
                                     w.x() * d.y() - w.y() * d.x());
   }
+  /// The solid's velocity a contact at x answers to, where the contact's surface point is `anchor` and its normal
+  /// n: the material velocity at x (friction holds x to it), with the normal part of the surface's velocity at the
+  /// anchor. A face contact moves corners that lie off the surface; at a corner, a spinning solid's material
+  /// velocity has a normal part its surface does not have, and removing it would turn a frictionless cloth with
+  /// the solid (docs/design.md §4). For a vertex contact anchor is x.
+  DRAPE_ALWAYS_INLINE Vec3<S> contactVelocityAt(const Vec3<S>& x, const Vec3<S>& n, const Vec3<S>& anchor) const {
+    const Vec3<S> d = anchor - x;
+    const Vec3<S>& w = angularVelocity;
+    const Vec3<S> r(w.y() * d.z() - w.z() * d.y(), w.z() * d.x() - w.x() * d.z(), w.x() * d.y() - w.y() * d.x());
+    return velocityAt(x) + n.dot(r) * n;
+  }
 };
 
 /// A solid ready for one substep: its distance field and motion in the cloth's scalar and local frame.
