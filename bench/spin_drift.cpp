@@ -7,51 +7,27 @@
 // Run: build/bench/spin_drift [seconds, default 10] [substep counts..., default 2 10]
 #include <drape/drape.hpp>
 
+#include <sphere_drape.hpp>
+
 #include <cstdio>
 #include <cstdlib>
-#include <memory>
 #include <vector>
 
 namespace {
 
 using namespace drape;
 
-struct Turn {
-  double momentum = 0;  // kg m^2/s
-  double rate = 0;      // rad/s
-};
-
-template <class S> Turn run(CollisionMethod method, int substeps, double spin, bool sphere, double seconds) {
-  const double radius = 0.3;
-  SheetDesc grid;
-  grid.nx = grid.ny = 41;
-  grid.spacing = 0.02;
-  grid.placement.position = {0, 0, radius + 0.005};
-  auto asset = std::make_shared<const ClothAsset<S>>(ClothAsset<S>::sheet(grid));
+template <class S>
+scenes::AxialSpin run(CollisionMethod method, int substeps, double spin, bool sphere, double seconds) {
+  using scenes::SphereDrape;
   Settings settings;
   settings.collisionMethod = method;
   settings.subStepCount = substeps;
-  Solver<S> solver(asset, settings);
-  if (sphere) {
-    Solid<Sphere> ball;
-    ball.shape.radius = radius;
-    ball.motion = Motion::Kinematic;
-    ball.angularVelocity = {0, 0, spin};
-    solver.addSolid(ball);
-  }
-  solver.pin(20 * 41 + 20);
+  Solver<S> solver(SphereDrape::asset<S>(), settings);
+  if (sphere) solver.addSolid(SphereDrape::sphere(spin));
+  solver.pin(SphereDrape::kCentre);
   for (int f = 0; f < int(seconds * 60 + 0.5); ++f) solver.step(1.0 / 60.0);
-  Turn turn;
-  double inertia = 0;
-  for (Index i = 0; i < solver.vertexCount(); ++i) {
-    const double w = double(solver.state().invMass[std::size_t(i)]);
-    if (w == 0) continue;
-    const Eigen::Vector3d p = solver.position(i), v = solver.velocity(i);
-    turn.momentum += (p.x() * v.y() - p.y() * v.x()) / w;
-    inertia += (p.x() * p.x() + p.y() * p.y()) / w;
-  }
-  turn.rate = turn.momentum / inertia;
-  return turn;
+  return scenes::axialSpin(solver);
 }
 
 }  // namespace
@@ -83,10 +59,10 @@ int main(int argc, char** argv) {
     for (int n : substeps)
       for (CollisionMethod m : {CollisionMethod::Faces, CollisionMethod::Vertices, CollisionMethod::InSolve}) {
         if (!scene.sphere && m != CollisionMethod::Faces) continue;  // no contact: the methods are one
-        const Turn f = run<float>(m, n, scene.spin, scene.sphere, seconds);
-        const Turn d = run<double>(m, n, scene.spin, scene.sphere, seconds);
+        const scenes::AxialSpin f = run<float>(m, n, scene.spin, scene.sphere, seconds);
+        const scenes::AxialSpin d = run<double>(m, n, scene.spin, scene.sphere, seconds);
         std::printf("| %s | %d | %s | %+.2e | %+.3f | %+.2e | %+.3f |\n", scene.name, n,
-                    scene.sphere ? toString(m) : "any", f.momentum, f.rate, d.momentum, d.rate);
+                    scene.sphere ? toString(m) : "any", f.momentum, f.rate(), d.momentum, d.rate());
         std::fflush(stdout);
       }
   return 0;

@@ -1,5 +1,6 @@
 // Kinematic solids: the contact velocity v_c = v + w x (x - x_r) drives friction and the velocity split.
 #include <drape/drape.hpp>
+#include <sphere_drape.hpp>
 
 #include <catch2/catch.hpp>
 
@@ -58,22 +59,6 @@ TEMPLATE_TEST_CASE("a turntable spins a sticky cloth at w x r", "[kinematic]", f
   }
 }
 
-namespace {
-
-/// Mass-weighted angular momentum of the free vertices about the world z axis.
-template <class S> double angularMomentumZ(const drape::Solver<S>& solver) {
-  double l = 0;
-  for (drape::Index i = 0; i < solver.vertexCount(); ++i) {
-    const double w = double(solver.state().invMass[std::size_t(i)]);
-    if (w == 0) continue;
-    const Eigen::Vector3d p = solver.position(i), v = solver.velocity(i);
-    l += (p.x() * v.y() - p.y() * v.x()) / w;
-  }
-  return l;
-}
-
-}  // namespace
-
 TEMPLATE_TEST_CASE("a frictionless spinning sphere answers a cloth's contacts as the same sphere at rest",
                    "[kinematic][spin]", float, double) {
   // A 41x41 cloth draped over a 0.3 m sphere from its top, its centre pinned on the axis. Without friction
@@ -84,23 +69,15 @@ TEMPLATE_TEST_CASE("a frictionless spinning sphere answers a cloth's contacts as
   // substep from the same state, one with the sphere spinning at 2 rad/s about the vertical: the velocities must
   // agree to rounding. Measured: 6.2e-8 m/s apart in float, 1.2e-16 in double; 4.0e-2 and 3.1e-2 before.
   using S = TestType;
-  drape::SheetDesc grid;
-  grid.nx = grid.ny = 41;
-  grid.spacing = 0.02;
-  const double radius = 0.3;
-  grid.placement.position = {0, 0, radius + 0.005};
-  auto asset = std::make_shared<const drape::ClothAsset<S>>(drape::ClothAsset<S>::sheet(grid));
-  drape::Solid<drape::Sphere> ball;
-  ball.shape.radius = radius;
-  ball.motion = drape::Motion::Kinematic;
+  using drape::scenes::SphereDrape;
+  const auto asset = SphereDrape::asset<S>();
   drape::Solver<S> still(asset), spinning(asset);
   for (auto* solver : {&still, &spinning}) {
-    solver->addSolid(ball);
-    solver->pin(20 * 41 + 20);
+    solver->addSolid(SphereDrape::sphere());
+    solver->pin(SphereDrape::kCentre);
     for (int f = 0; f < 20; ++f) solver->step(1.0 / 60.0);
   }
-  ball.angularVelocity = {0, 0, 2};
-  spinning.setSolid(0, ball);
+  spinning.setSolid(0, SphereDrape::sphere(2.0));
   drape::Settings one;
   one.subStepCount = 1;
   for (auto* solver : {&still, &spinning}) {
@@ -128,7 +105,8 @@ TEMPLATE_TEST_CASE("a frictionless turntable leaves the cloth lying on it at res
   for (int f = 0; f < 60; ++f) solver.step(1.0 / 60.0);
   double fastest = 0;
   for (drape::Index i = 0; i < solver.vertexCount(); ++i) fastest = std::max(fastest, solver.velocity(i).norm());
-  INFO("fastest vertex " << fastest << " m/s, angular momentum about the axis " << angularMomentumZ(solver));
+  const double momentum = drape::scenes::axialSpin(solver).momentum;
+  INFO("fastest vertex " << fastest << " m/s, angular momentum about the axis " << momentum);
   CHECK(fastest <= 1e-6);
-  CHECK(std::abs(angularMomentumZ(solver)) <= 1e-12);
+  CHECK(std::abs(momentum) <= 1e-12);
 }

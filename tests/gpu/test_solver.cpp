@@ -2,6 +2,7 @@
 // vertex over 1 to 10 substeps and on its invariants over seconds; and two GPU runs, bit for bit.
 #include "gpu_helpers.hpp"
 #include "slope.hpp"
+#include "sphere_drape.hpp"
 
 #include <drape/drape.hpp>
 
@@ -430,19 +431,11 @@ TEST_CASE("a frictionless spinning sphere answers the cloth as the same sphere a
   // face, so the two solvers' substeps are not compared here; tests/gpu/test_faces.cpp compares the passes.)
   // With the corners' own material velocity in collide_faces.comp, the two were 3.4e-2 m/s apart.
   auto& context = drape::test::gpuContext();
-  drape::SheetDesc grid;
-  grid.nx = grid.ny = 41;
-  grid.spacing = 0.02;
-  const double radius = 0.3;
-  grid.placement.position = {0, 0, radius + 0.005};
-  auto asset = std::make_shared<const drape::ClothAsset<float>>(drape::ClothAsset<float>::sheet(grid));
-  const Index centre = 20 * 41 + 20;
-  drape::Solid<drape::Sphere> ball;
-  ball.shape.radius = radius;
-  ball.motion = drape::Motion::Kinematic;
+  using drape::scenes::SphereDrape;
+  const auto asset = SphereDrape::asset<float>();
   drape::Solver<float> drape(asset);
-  drape.addSolid(ball);
-  drape.pin(centre);
+  drape.addSolid(SphereDrape::sphere());
+  drape.pin(SphereDrape::kCentre);
   for (int f = 0; f < 20; ++f) drape.step(1.0 / 60.0);
   std::vector<Eigen::Vector3d> x, v;
   for (Index i = 0; i < drape.vertexCount(); ++i) x.push_back(drape.position(i)), v.push_back(drape.velocity(i));
@@ -450,10 +443,8 @@ TEST_CASE("a frictionless spinning sphere answers the cloth as the same sphere a
   drape::Settings one;
   one.subStepCount = 1;
   auto substep = [&](auto& solver, double spin) {
-    drape::Solid<drape::Sphere> s = ball;
-    s.angularVelocity = {0, 0, spin};
-    solver.addSolid(s);
-    solver.pin(centre);
+    solver.addSolid(SphereDrape::sphere(spin));
+    solver.pin(SphereDrape::kCentre);
     solver.setPositions(x);
     solver.setVelocities(v);
     solver.step(1.0 / 600.0);

@@ -1,0 +1,53 @@
+#pragma once
+// A 41x41 cloth (2 cm spacing) lying on the top of a frictionless kinematic 0.3 m sphere at the origin, its centre
+// vertex on the vertical axis through the sphere's centre, where it is pinned: nothing can turn the cloth about
+// that axis (docs/design.md §4, "No spin from nothing").
+
+#include <drape/drape.hpp>
+
+#include <memory>
+
+namespace drape::scenes {
+
+struct SphereDrape {
+  static constexpr Index kSide = 41;
+  static constexpr double kRadius = 0.3;  ///< m
+  static constexpr Index kCentre = (kSide / 2) * kSide + kSide / 2;  ///< the vertex on the axis
+
+  template <Scalar S> static std::shared_ptr<const ClothAsset<S>> asset() {
+    SheetDesc grid;
+    grid.nx = grid.ny = kSide;
+    grid.spacing = 0.02;
+    grid.placement.position = {0, 0, kRadius + 0.005};  // resting at the default thickness
+    return std::make_shared<const ClothAsset<S>>(ClothAsset<S>::sheet(grid));
+  }
+  /// The sphere, spinning at `spin` rad/s about the vertical.
+  static Solid<Sphere> sphere(double spin = 0) {
+    Solid<Sphere> ball;
+    ball.shape.radius = kRadius;
+    ball.motion = Motion::Kinematic;
+    ball.angularVelocity = {0, 0, spin};
+    return ball;
+  }
+};
+
+/// A cloth's mass-weighted angular momentum about the world's vertical axis (kg m^2/s) and its moment of inertia
+/// about it (kg m^2), over the free vertices.
+struct AxialSpin {
+  double momentum = 0;
+  double inertia = 0;
+  double rate() const { return momentum / inertia; }  ///< rad/s
+};
+template <class Solver> AxialSpin axialSpin(const Solver& solver) {
+  AxialSpin out;
+  for (Index i = 0; i < solver.vertexCount(); ++i) {
+    const double w = double(solver.state().invMass[std::size_t(i)]);
+    if (w == 0) continue;
+    const Eigen::Vector3d p = solver.position(i), v = solver.velocity(i);
+    out.momentum += (p.x() * v.y() - p.y() * v.x()) / w;
+    out.inertia += (p.x() * p.x() + p.y() * p.y()) / w;
+  }
+  return out;
+}
+
+}  // namespace drape::scenes
