@@ -298,8 +298,9 @@ template <class Shape, class Place> void compareSweptPasses(Place&& place, doubl
     k.set(layout::kThickness, thickness);
     drape::gpu::setShape(k.id(), drape::gpu::packShape(solid.sdf));
     k.set(layout::kSolidCentre, solid.motion.centre.x(), solid.motion.centre.y(), solid.motion.centre.z());
-    k.set(layout::kSolidLinear, 0.0f, 0.0f, 0.0f);
-    k.set(layout::kSolidAngular, 0.0f, 0.0f, 0.0f);
+    const Vec3<float>&lin = solid.motion.linearVelocity, &ang = solid.motion.angularVelocity;
+    k.set(layout::kSolidLinear, lin.x(), lin.y(), lin.z());
+    k.set(layout::kSolidAngular, ang.x(), ang.y(), ang.z());
     glProgramUniform2f(k.id(), layout::kFriction, solid.motion.staticFriction, solid.motion.dynamicFriction);
     k.set(layout::kBoxLow, solid.boxLow.x(), solid.boxLow.y(), solid.boxLow.z());
     k.set(layout::kBoxHigh, solid.boxHigh.x(), solid.boxHigh.y(), solid.boxHigh.z());
@@ -327,11 +328,22 @@ template <class Shape, class Place> void compareSweptPasses(Place&& place, doubl
   REQUIRE(drape::test::largestDifference(x, state.x) > 1e-2);  // the sweeps moved vertices by centimetres
   const double gap = drape::test::largestDifference(gpuPositions, x);
   int live = 0;
+  double velocityGap = 0, fastest = 0;  // the solid's velocity each contact answers to
   for (Index i = 0; i < asset.vertexCount(); ++i) {
     INFO("vertex " << i);
-    CHECK((gpuC[std::size_t(i)].slots[0] != 0) == contacts.live(i));
+    const layout::Contact& c = gpuC[std::size_t(i)];
+    CHECK((c.slots[0] != 0) == contacts.live(i));
     live += contacts.live(i);
+    if (!contacts.live(i) || c.slots[0] != std::uint32_t(contacts.slotCount[i])) continue;
+    for (int k = 0; k < contacts.slotCount[i]; ++k) {
+      const Vec3<float>& cpu = contacts.slots[i][k].solidVelocity;
+      const Vec3<float> gpu(c.velocity[k][0], c.velocity[k][1], c.velocity[k][2]);
+      velocityGap = std::max(velocityGap, double((gpu - cpu).norm()));
+      fastest = std::max(fastest, double(cpu.norm()));
+    }
   }
+  INFO("solid velocities at the contacts: up to " << fastest << " m/s, GPU against CPU " << velocityGap);
+  CHECK(velocityGap <= 4 * 1.2e-7 * std::max(fastest, 1.0));
   std::printf("[gpu sweeps] %d vertices in contact (%lld vertex and %lld face paths met the solid); largest "
               "position gap %.2e m\n",
               live, static_cast<long long>(share.sweptFound), static_cast<long long>(stats.sweepContacts), gap);
@@ -350,6 +362,21 @@ TEST_CASE("continuous contact on the GPU: the swept vertex and face passes again
       rod.pose.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(0.5 * M_PI, Eigen::Vector3d::UnitX()));
       rod.pose.position = origin + Eigen::Vector3d(0.01, 0.0, -0.015);
       rod.staticFriction = 0.3;
+      return rod;
+    }, 0.03);
+  }
+  SECTION("the same capsule, kinematic, spinning and rising") {
+    // A swept contact answers the normal part of the solid's velocity where the path met it
+    // (SolidMotion::contactVelocityAt, solidContactVelocity in common.glsl).
+    compareSweptPasses<drape::Capsule>([](const Eigen::Vector3d& origin) {
+      drape::Solid<drape::Capsule> rod;
+      rod.shape.radius = 0.003;
+      rod.shape.halfHeight = 0.4;
+      rod.pose.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(0.5 * M_PI, Eigen::Vector3d::UnitX()));
+      rod.pose.position = origin + Eigen::Vector3d(0.01, 0.0, -0.015);
+      rod.motion = drape::Motion::Kinematic;
+      rod.linearVelocity = {0, 0, 0.5};
+      rod.angularVelocity = {4, 0, 3};
       return rod;
     }, 0.03);
   }
