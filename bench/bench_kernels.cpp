@@ -155,7 +155,8 @@ template <class S, bool kFriction> void respondAndPropagate(benchmark::State& st
     contacts.begin();
     live = 0;
     for (Index i = n / 3; i < 2 * n / 3; ++i, ++live) {
-      contacts.template record<false>(i, x[i], drape::Vec3<S>::UnitZ(), S(1e-4), motion, x[i]);
+      contacts.template record<false>(i, x[i], drape::Vec3<S>::UnitZ(), S(1e-4), motion, x[i],
+                                       motion.velocityAt(x[i]));
       contacts.normalDv[i] = S(0.2);  // what the response would have removed: the source of propagation
     }
     for (auto& vi : v) vi = drape::Vec3<S>(0.1, 0, -0.2);

@@ -26,9 +26,9 @@ template <class S> struct Wedge {
     buffer.begin();
     for (int k = 0; k < 3; ++k) {
       const drape::Vec3<S> placed = x0 + behind[k] * n[k];
-      buffer.template record<false>(0, placed, n[k], behind[k], still, placed);
+      buffer.template record<false>(0, placed, n[k], behind[k], still, placed, still.velocityAt(placed));
     }
-    if (floor) buffer.template record<false>(0, x0, drape::Vec3<S>::UnitZ(), S(0), still, x0);
+    if (floor) buffer.template record<false>(0, x0, drape::Vec3<S>::UnitZ(), S(0), still, x0, still.velocityAt(x0));
     return buffer;
   }
   /// Where the settle puts the vertex.

@@ -107,29 +107,31 @@ template <Scalar S> struct ContactBuffer {
     return sum;
   }
 
-  /// Records that vertex i was placed at x, dn along n, out of a solid moving with m (its velocity there is the
-  /// slot's solidVelocity); `anchor` is the placed point the contact was found at (x itself for a vertex contact,
-  /// the face's deepest point for a face contact, the point where a swept path met the solid). kBody: the solid is a coupled body (m.body >= 0), whose slots
+  /// Records that vertex i was placed at x, dn along n, out of a solid moving with m; `anchor` is the placed point
+  /// the contact was found at (x itself for a vertex contact, the face's deepest point for a face contact, the
+  /// point where a swept path met the solid) and vc the solid's velocity the contact answers to (the slot's
+  /// solidVelocity: m.velocityAt(x) for a vertex contact, m.contactVelocityAt(x, n, anchor) for the others, which
+  /// a vertex contact need not pay for). kBody: the solid is a coupled body (m.body >= 0), whose slots
   /// keep a ContactLine; other solids' contacts write none, so a scene without bodies does not pay for them. A
   /// vertex's first contact of the substep (nearly every one) takes the inlined path; further ones merge in
   /// recordMore.
   template <bool kBody>
   DRAPE_ALWAYS_INLINE void record(Index i, const Vec3<S>& x, const Vec3<S>& n, S dn, const SolidMotion<S>& m,
-                                  const Vec3<S>& anchor) {
+                                  const Vec3<S>& anchor, const Vec3<S>& vc) {
     if (stamp[i] != current) {
       stamp[i] = current;
       slotCount[i] = 1;
-      slots[i][0] = {n, m.contactVelocityAt(x, n, anchor), dn, m.staticFriction, m.dynamicFriction, n.dot(x), m.body};
+      slots[i][0] = {n, vc, dn, m.staticFriction, m.dynamicFriction, n.dot(x), m.body};
       if constexpr (kBody) lines[i][0] = {n, (anchor - m.centre).cross(n)};
       return;
     }
-    recordMore<kBody>(i, x, n, dn, m, anchor);
+    recordMore<kBody>(i, x, n, dn, m, anchor, vc);
   }
 
  private:
   template <bool kBody>
-  void recordMore(Index i, const Vec3<S>& x, const Vec3<S>& n, S dn, const SolidMotion<S>& m, const Vec3<S>& anchor) {
-    const Vec3<S> vc = m.contactVelocityAt(x, n, anchor);
+  void recordMore(Index i, const Vec3<S>& x, const Vec3<S>& n, S dn, const SolidMotion<S>& m, const Vec3<S>& anchor,
+                  const Vec3<S>& vc) {
     auto& own = slots[i];
     int best = -1;
     S bestCos = kMergeCos;
@@ -241,7 +243,8 @@ VertexPassShare<S> projectVertexContactsAs(Index begin, Index end, const Compile
           const S dn = thickness - beyond;
           x[i] += dn * hit.normal;
           // A coupled body's push acts on the line through the point where the path met the solid.
-          contacts.template record<kBody>(i, x[i], hit.normal, dn, solid.motion, hit.point);
+          contacts.template record<kBody>(i, x[i], hit.normal, dn, solid.motion, hit.point,
+                                          solid.motion.contactVelocityAt(x[i], hit.normal, hit.point));
           moved = std::max(moved, (x[i] - binned[i]).squaredNorm());
           ++share.sweptFound;
         }
@@ -252,7 +255,7 @@ VertexPassShare<S> projectVertexContactsAs(Index begin, Index end, const Compile
     if (phi >= thickness - slack) continue;
     const S dn = thickness - phi;
     x[i] += dn * n;
-    contacts.template record<kBody>(i, x[i], n, dn, solid.motion, x[i]);
+    contacts.template record<kBody>(i, x[i], n, dn, solid.motion, x[i], solid.motion.velocityAt(x[i]));
     moved = std::max(moved, (x[i] - binned[i]).squaredNorm());
     ++share.found;
   }
@@ -328,7 +331,8 @@ S projectFaceContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, int p
               const S dn = n.dot(from[k] + when * (to[k] - from[k]) - x[t[k]]);
               if (!(dn > S(0))) continue;
               x[t[k]] += dn * n;
-              contacts.template record<kBody>(t[k], x[t[k]], n, dn, solid.motion, hit.point);
+              contacts.template record<kBody>(t[k], x[t[k]], n, dn, solid.motion, hit.point,
+                                              solid.motion.contactVelocityAt(x[t[k]], n, hit.point));
               moved = std::max(moved, (x[t[k]] - binned[t[k]]).squaredNorm());
               any = true;
             }
@@ -365,7 +369,8 @@ S projectFaceContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, int p
       if (wb[k] <= S(0)) continue;
       const S dn = wb[k] / denom * depth;
       x[t[k]] += dn * q.normal;
-      contacts.template record<kBody>(t[k], x[t[k]], q.normal, dn, solid.motion, placed);
+      contacts.template record<kBody>(t[k], x[t[k]], q.normal, dn, solid.motion, placed,
+                                      solid.motion.contactVelocityAt(x[t[k]], q.normal, placed));
       moved = std::max(moved, (x[t[k]] - binned[t[k]]).squaredNorm());
     }
   }
