@@ -2,8 +2,8 @@
 // one dispatch per ring: a free vertex not in contact gathers from its neighbours in the ring before (ring 1: the
 // contact vertices that gained normal velocity) the mean of their corrections times the weight, along their
 // mean normal, and takes of it only what removes its own approach toward the solid (relative to the solids'
-// speed along that normal). Each vertex writes only
-// itself, and gathers its neighbours in the asset's order, so the sums are the CPU's.
+// speed along that normal). Each vertex writes only itself, and gathers its neighbours in the asset's order, so
+// the sums are the CPU's.
 layout(local_size_x = DRAPE_WORKGROUP) in;
 layout(std430, binding = DRAPE_B_VELOCITIES) buffer Velocities { vec4 v[]; };
 layout(std430, binding = DRAPE_B_POSITIONS) readonly buffer Positions { vec4 x[]; };

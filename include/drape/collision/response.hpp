@@ -573,7 +573,8 @@ template <Scalar S> struct PropagationBuffer {
 
 /// Spreads the contacts' normal velocity corrections to the vertices around them (the SDF collision paper): ring r gets
 /// weight^r of the mean correction of its sources, along their mean normal, and only as much as removes its
-/// own approach toward the solid (relative to the solids' normal speed there), so a neighbour is never pushed away (which would make the seam shake).
+/// own approach toward the solid (relative to the solids' speed along that normal), so a neighbour is never
+/// pushed away (which would make the seam shake).
 /// Each vertex gathers from its neighbours in the ring before (the GPU kernel gathers the same way), so the
 /// sums have one order whatever the thread count. This is ring `ring` (1, 2, ...) for vertices [begin, end),
 /// after buf.beginPass(); ring r + 1 starts when every vertex is done with ring r.

@@ -72,7 +72,7 @@ template <Scalar S> struct SolidMotion {
   /// n: the material velocity at x (friction holds x to it), with the normal part of the surface's velocity at the
   /// anchor. A face contact moves corners that lie off the surface; at a corner, a spinning solid's material
   /// velocity has a normal part its surface does not have, and removing it would turn a frictionless cloth with
-  /// the solid (docs/design.md §4). For a vertex contact anchor is x.
+  /// the solid (docs/design.md §4). A vertex contact's anchor is the vertex, where this is velocityAt(x).
   DRAPE_ALWAYS_INLINE Vec3<S> contactVelocityAt(const Vec3<S>& x, const Vec3<S>& n, const Vec3<S>& anchor) const {
     const Vec3<S> d = anchor - x;
     const Vec3<S>& w = angularVelocity;
