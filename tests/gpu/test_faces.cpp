@@ -354,26 +354,24 @@ template <class Shape, class Place> void compareSweptPasses(Place&& place, doubl
 }  // namespace
 
 TEST_CASE("continuous contact on the GPU: the swept vertex and face passes against the CPU's", "[gpu]") {
+  // A 3 mm capsule between two columns of vertices, 1.5 cm below the cloth.
+  const auto thinRod = [](const Eigen::Vector3d& origin) {
+    drape::Solid<drape::Capsule> rod;
+    rod.shape.radius = 0.003;
+    rod.shape.halfHeight = 0.4;
+    rod.pose.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(0.5 * M_PI, Eigen::Vector3d::UnitX()));
+    rod.pose.position = origin + Eigen::Vector3d(0.01, 0.0, -0.015);
+    rod.staticFriction = 0.3;
+    return rod;
+  };
   SECTION("a 3 mm capsule between two columns of vertices, crossed by 3 cm") {
-    compareSweptPasses<drape::Capsule>([](const Eigen::Vector3d& origin) {
-      drape::Solid<drape::Capsule> rod;
-      rod.shape.radius = 0.003;
-      rod.shape.halfHeight = 0.4;
-      rod.pose.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(0.5 * M_PI, Eigen::Vector3d::UnitX()));
-      rod.pose.position = origin + Eigen::Vector3d(0.01, 0.0, -0.015);
-      rod.staticFriction = 0.3;
-      return rod;
-    }, 0.03);
+    compareSweptPasses<drape::Capsule>(thinRod, 0.03);
   }
   SECTION("the same capsule, kinematic, spinning and rising") {
     // A swept contact answers the normal part of the solid's velocity where the path met it
     // (SolidMotion::contactVelocityAt, solidContactVelocity in common.glsl).
-    compareSweptPasses<drape::Capsule>([](const Eigen::Vector3d& origin) {
-      drape::Solid<drape::Capsule> rod;
-      rod.shape.radius = 0.003;
-      rod.shape.halfHeight = 0.4;
-      rod.pose.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(0.5 * M_PI, Eigen::Vector3d::UnitX()));
-      rod.pose.position = origin + Eigen::Vector3d(0.01, 0.0, -0.015);
+    compareSweptPasses<drape::Capsule>([&](const Eigen::Vector3d& origin) {
+      drape::Solid<drape::Capsule> rod = thinRod(origin);
       rod.motion = drape::Motion::Kinematic;
       rod.linearVelocity = {0, 0, 0.5};
       rod.angularVelocity = {4, 0, 3};
