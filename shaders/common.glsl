@@ -8,22 +8,23 @@ float dot3(vec3 a, vec3 b) {
 }
 float length3(vec3 a) { return sqrt(dot3(a, a)); }
 
-// The velocity of a solid's material point at x: v + w x (x - centre) (SolidMotion::velocityAt).
-vec3 solidVelocityAt(vec3 x, vec3 centre, vec3 linear, vec3 angular) {
-  precise vec3 d = x - centre;
+// w x d: how much faster a solid spinning at w moves at a point d further on (SolidMotion::spin).
+vec3 spinOver(vec3 angular, vec3 d) {
   precise vec3 r = vec3(angular.y * d.z - angular.z * d.y, angular.z * d.x - angular.x * d.z,
                         angular.x * d.y - angular.y * d.x);
-  precise vec3 v = linear + r;
+  return r;
+}
+
+// The velocity of a solid's material point at x: v + w x (x - centre) (SolidMotion::velocityAt).
+vec3 solidVelocityAt(vec3 x, vec3 centre, vec3 linear, vec3 angular) {
+  precise vec3 v = linear + spinOver(angular, x - centre);
   return v;
 }
 
 // The solid's velocity a contact at x answers to, its surface point being anchor and its normal n: the material
 // velocity at x with the normal part of the surface's velocity at the anchor (SolidMotion::contactVelocityAt).
 vec3 solidContactVelocity(vec3 x, vec3 n, vec3 anchor, vec3 centre, vec3 linear, vec3 angular) {
-  precise vec3 d = anchor - x;
-  precise vec3 r = vec3(angular.y * d.z - angular.z * d.y, angular.z * d.x - angular.x * d.z,
-                        angular.x * d.y - angular.y * d.x);
-  precise const float s = dot3(n, r);
+  precise const float s = dot3(n, spinOver(angular, anchor - x));
   precise vec3 v = solidVelocityAt(x, centre, linear, angular) + s * n;
   return v;
 }

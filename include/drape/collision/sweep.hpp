@@ -52,8 +52,8 @@ SweepHit<S> sweepPoint(const Field& sdf, const Vec3<S>& a, const Vec3<S>& b, S t
 /// Returns false for a face that starts inside the solid, or no hit within kFaceSweepSteps positions, or none
 /// before the end (the discrete face pass judges the end).
 template <Scalar S, class Field>
-DRAPE_NOINLINE bool sweepFace(const Field& sdf, const Vec3<S> (&a)[3], const Vec3<S> (&b)[3], S thickness, int maxIterations,
-               bool exactSearch, FaceQuery<S>& q, int& evaluations, S& when) {
+DRAPE_NOINLINE bool sweepFace(const Field& sdf, const Vec3<S> (&a)[3], const Vec3<S> (&b)[3], S thickness,
+                              int maxIterations, bool exactSearch, FaceQuery<S>& q, int& evaluations, S& when) {
   const S lipschitz = S(lipschitzOf<Field>());
   const Vec3<S> d[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
   const S travel = std::sqrt(std::max({d[0].squaredNorm(), d[1].squaredNorm(), d[2].squaredNorm()}));

@@ -61,23 +61,20 @@ template <Scalar S> struct SolidMotion {
   std::int32_t body = -1;  ///< index of the solver's coupled body this solid pushes; -1 for none
 
   /// v_c(x) = v_r + w x (x - x_r): the velocity of the solid's material point at x (the thesis, eq. 5.4).
-  DRAPE_ALWAYS_INLINE Vec3<S> velocityAt(const Vec3<S>& x) const {
-    // Written out: in every contact record, where GCC would otherwise call Eigen's cross product out of line.
-    const Vec3<S> d = x - centre;
-    const Vec3<S>& w = angularVelocity;
-    return linearVelocity + Vec3<S>(w.y() * d.z() - w.z() * d.y(), w.z() * d.x() - w.x() * d.z(),
-                                    w.x() * d.y() - w.y() * d.x());
-  }
+  DRAPE_ALWAYS_INLINE Vec3<S> velocityAt(const Vec3<S>& x) const { return linearVelocity + spin(x - centre); }
   /// The solid's velocity a contact at x answers to, where the contact's surface point is `anchor` and its normal
   /// n: the material velocity at x (friction holds x to it), with the normal part of the surface's velocity at the
   /// anchor. A face contact moves corners that lie off the surface; at a corner, a spinning solid's material
   /// velocity has a normal part its surface does not have, and removing it would turn a frictionless cloth with
   /// the solid (docs/design.md §4). A vertex contact's anchor is the vertex, where this is velocityAt(x).
   DRAPE_ALWAYS_INLINE Vec3<S> contactVelocityAt(const Vec3<S>& x, const Vec3<S>& n, const Vec3<S>& anchor) const {
-    const Vec3<S> d = anchor - x;
+    return velocityAt(x) + n.dot(spin(anchor - x)) * n;
+  }
+  /// w x d: how much faster the solid's material moves at a point d further on.
+  DRAPE_ALWAYS_INLINE Vec3<S> spin(const Vec3<S>& d) const {
+    // Written out: in every contact record, where GCC would otherwise call Eigen's cross product out of line.
     const Vec3<S>& w = angularVelocity;
-    const Vec3<S> r(w.y() * d.z() - w.z() * d.y(), w.z() * d.x() - w.x() * d.z(), w.x() * d.y() - w.y() * d.x());
-    return velocityAt(x) + n.dot(r) * n;
+    return Vec3<S>(w.y() * d.z() - w.z() * d.y(), w.z() * d.x() - w.x() * d.z(), w.x() * d.y() - w.y() * d.x());
   }
 };
 
