@@ -181,6 +181,8 @@ std::vector<BadSettings> badSettingsList() {
       {"iterationCount 1001", [](drape::Settings& s) { s.iterationCount = 1001; }, "iterationCount"},
       {"NaN gravity", [](drape::Settings& s) { s.gravity.y() = kNaN; }, "gravity"},
       {"infinite gravity", [](drape::Settings& s) { s.gravity.z() = -kInf; }, "gravity"},
+      {"gravity -1e300", [](drape::Settings& s) { s.gravity.z() = -1e300; }, "gravity"},
+      {"gravity 2e6 sideways", [](drape::Settings& s) { s.gravity.x() = 2e6; }, "gravity"},
       {"negative stretchCompliance", [](drape::Settings& s) { s.stretchCompliance = -1e-6; }, "stretchCompliance"},
       {"NaN stretchCompliance", [](drape::Settings& s) { s.stretchCompliance = kNaN; }, "stretchCompliance"},
       {"negative shearCompliance", [](drape::Settings& s) { s.shearCompliance = -1; }, "shearCompliance"},
@@ -308,6 +310,20 @@ TEMPLATE_TEST_CASE("fromMesh rejects an edge shared by three faces", "[input]", 
     drape::AssetOptions noBending;
     noBending.bending = false;
     CHECK_REJECTS(Asset::fromMesh(p, t, noBending), "manifold");
+  }
+}
+
+TEMPLATE_TEST_CASE("fromMesh rejects a face given twice, in either winding", "[input]", float, double) {
+  using S = TestType;
+  using Asset = drape::ClothAsset<S>;
+  auto [p, t] = unitSquare<S>();
+  SECTION("the same face twice") {
+    t.push_back({1, 2, 0});  // triangle 0 again, its corners rotated
+    CHECK_THROWS_WITH(Asset::fromMesh(p, t), Contains("triangle 2 repeats triangle 0"));
+  }
+  SECTION("the same face reversed") {
+    t.insert(t.begin(), {2, 1, 0});  // triangle 1 (was 0) wound the other way
+    CHECK_THROWS_WITH(Asset::fromMesh(p, t), Contains("repeats") && Contains("triangle 0") && Contains("triangle 1"));
   }
 }
 
@@ -619,12 +635,14 @@ TEMPLATE_TEST_CASE("addSolid rejects bad shapes, poses, velocities and friction,
     rejects(sphere, [](auto& s) { s.shape.radius = -0.2; }, "sphere radius");
     rejects(sphere, [](auto& s) { s.shape.radius = kNaN; }, "sphere radius");
     rejects(sphere, [](auto& s) { s.shape.radius = kInf; }, "sphere radius");
+    rejects(sphere, [](auto& s) { s.shape.radius = 1e300; }, "sphere radius");
   }
   SECTION("box half extents") {
     rejects(box, [](auto& s) { s.shape.halfExtents.y() = 0; }, "box half extents");
     rejects(box, [](auto& s) { s.shape.halfExtents.z() = -0.1; }, "box half extents");
     rejects(box, [](auto& s) { s.shape.halfExtents.x() = kNaN; }, "box half extents");
     rejects(box, [](auto& s) { s.shape.halfExtents.x() = kInf; }, "box half extents");
+    rejects(box, [](auto& s) { s.shape.halfExtents.z() = 2e5; }, "box half extents");
   }
   SECTION("capsule radius and half height") {
     rejects(capsule, [](auto& s) { s.shape.radius = -0.1; }, "capsule radius");
@@ -632,6 +650,8 @@ TEMPLATE_TEST_CASE("addSolid rejects bad shapes, poses, velocities and friction,
     rejects(capsule, [](auto& s) { s.shape.radius = kNaN; }, "capsule radius");
     rejects(capsule, [](auto& s) { s.shape.halfHeight = -0.2; }, "halfHeight");
     rejects(capsule, [](auto& s) { s.shape.halfHeight = kNaN; }, "halfHeight");
+    rejects(capsule, [](auto& s) { s.shape.radius = 1e300; }, "capsule radius");
+    rejects(capsule, [](auto& s) { s.shape.halfHeight = 1e6; }, "halfHeight");
   }
   SECTION("pose") {
     rejects(sphere, [](auto& s) { s.pose.rotation = Eigen::Quaterniond(2, 0, 0, 0); }, "unit quaternion");
@@ -675,6 +695,37 @@ TEMPLATE_TEST_CASE("addSolid rejects bad shapes, poses, velocities and friction,
   }
   checkUnchanged(snapshot(reference), snapshot(solver));
   CHECK(solver.stats().vertexContacts == reference.stats().vertexContacts);
+}
+
+// The limits are where the state stays finite: the strongest accepted gravity over the longest accepted step,
+// and the cloth inside the largest accepted sphere, pushed out across it in one step.
+TEMPLATE_TEST_CASE("at the largest accepted gravity and sphere a step leaves a finite state", "[input]", float,
+                   double) {
+  using S = TestType;
+  auto finite = [](const auto& solver) {
+    for (drape::Index i = 0; i < solver.vertexCount(); ++i)
+      if (!solver.position(i).allFinite() || !solver.velocity(i).allFinite()) return false;
+    return true;
+  };
+  SECTION("gravity 1e6 m/s^2 in every component, a 10 s step") {
+    drape::Settings settings;
+    settings.gravity = Eigen::Vector3d::Constant(-drape::limits::kMaxAcceleration);
+    drape::Solver<S> solver(smallGrid<S>(), settings);
+    drape::Solid<drape::Plane> floor;
+    solver.addSolid(floor);
+    solver.step(drape::limits::kMaxStep);
+    CHECK(finite(solver));
+  }
+  SECTION("a sphere of radius 1e5 m around the cloth") {
+    drape::Solver<S> solver(smallGrid<S>());
+    drape::Solid<drape::Sphere> ball;
+    ball.shape.radius = drape::limits::kMaxShapeSize;
+    ball.pose.position = {0.1, 0, 0};
+    solver.addSolid(ball);
+    solver.step(1.0 / 60);
+    CHECK(finite(solver));
+    CHECK((solver.position(0) - Eigen::Vector3d(0.1, 0, 0)).norm() >= 0.99 * drape::limits::kMaxShapeSize);
+  }
 }
 
 TEMPLATE_TEST_CASE("setSolid rejects a bad solid and keeps the old one", "[input]", float, double) {

@@ -622,6 +622,19 @@ TEST_CASE("OBJ files: a saved mesh loads back the same; quads are split; errors 
     CHECK_THROWS_WITH(buildDistanceGrid(loadObj(open)), Contains("at least 4 triangles"));
     CHECK_THROWS_WITH(saveObj(makeBoxMesh(Vec(1, 1, 1)), (dir.path / "no" / "such" / "dir.obj").string()),
                       Contains("dir.obj"));
+    // A directory is named as one, not as a file without faces.
+    CHECK_THROWS_WITH(loadObj(dir.path.string()), Contains("is a directory"));
+    // A coordinate that is not a finite number is reported with its line (the parser would read it as 0).
+    const std::string tetra = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+    CHECK_NOTHROW(validateClosedMesh(loadObj(dir.file("tetra.obj", tetra))));
+    const std::string nan = dir.file("nan.obj", "# a comment\nv 0 0 0\nv nan 0 0\n" + tetra.substr(16));
+    CHECK_THROWS_WITH(loadObj(nan), Contains("line 3") && Contains("'nan' is not a finite number"));
+    const std::string huge = dir.file("huge.obj", "v 0 0 0\nv 1 0 1e999\n" + tetra.substr(16));
+    CHECK_THROWS_WITH(loadObj(huge), Contains("line 2") && Contains("'1e999'"));
+    const std::string word = dir.file("word.obj", "v 0 0 0\nv 1 0 0\nv 0 1x 0\n" + tetra.substr(24));
+    CHECK_THROWS_WITH(loadObj(word), Contains("line 3") && Contains("'1x'"));
+    const std::string shortLine = dir.file("short.obj", "v 0 0\n" + tetra.substr(8));
+    CHECK_THROWS_WITH(loadObj(shortLine), Contains("line 1") && Contains("coordinate 3 is missing"));
   }
 }
 

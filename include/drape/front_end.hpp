@@ -32,17 +32,6 @@ struct Pin {
   Eigen::Vector3d target;  ///< world (m)
 };
 
-/// The limits a solver checks what it is given against.
-namespace limits {
-inline constexpr double kRebaseDistance = 0.5;  ///< m the cloth's centre may drift from its local origin
-inline constexpr double kMaxDistance = 1e5;     ///< m, largest accepted offset from the local origin
-inline constexpr double kMaxCoordinate = 1e9;   ///< m, largest accepted world coordinate
-inline constexpr double kMaxSpeed = 1e5;        ///< m/s, largest accepted velocity component
-inline constexpr double kMaxStep = 10;          ///< s, longest accepted step
-inline constexpr double kMinSubStep = 1e-6;     ///< s, below this h^2 underflows float
-inline constexpr double kOriginLattice = 64;    ///< local origins sit on a 1/64 m lattice (exact shifts in float)
-}  // namespace limits
-
 /// What a program may change of the state through the front end.
 enum class StateChange { Positions, Velocities, Masses };
 

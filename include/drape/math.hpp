@@ -31,6 +31,23 @@ struct Error : std::invalid_argument {
   using std::invalid_argument::invalid_argument;
 };
 
+/// The limits a solver checks what it is given against.
+namespace limits {
+inline constexpr double kRebaseDistance = 0.5;  ///< m the cloth's centre may drift from its local origin
+inline constexpr double kMaxDistance = 1e5;     ///< m, largest accepted offset from the local origin
+inline constexpr double kMaxCoordinate = 1e9;   ///< m, largest accepted world coordinate
+inline constexpr double kMaxSpeed = 1e5;        ///< m/s, largest accepted velocity component
+inline constexpr double kMaxStep = 10;          ///< s, longest accepted step
+inline constexpr double kMinSubStep = 1e-6;     ///< s, below this h^2 underflows float
+inline constexpr double kOriginLattice = 64;    ///< local origins sit on a 1/64 m lattice (exact shifts in float)
+/// m/s^2, largest accepted gravity component: a 10 s step from rest then ends 5e7 m away at 1e7 m/s, where
+/// squared lengths still fit in float.
+inline constexpr double kMaxAcceleration = 1e6;
+/// m, largest accepted size of an analytic shape (a radius, a half extent or a half height): the cloth a solid
+/// pushes out stays within kMaxDistance of it.
+inline constexpr double kMaxShapeSize = 1e5;
+}  // namespace limits
+
 /// A rigid placement in world coordinates (metres), always in double so that large worlds stay exact.
 struct Pose {
   Eigen::Quaterniond rotation = Eigen::Quaterniond::Identity();

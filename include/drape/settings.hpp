@@ -124,7 +124,10 @@ struct Settings {
             "subStepCount must be in [1, 10000] (got " + std::to_string(subStepCount) + ")");
     require(iterationCount >= 1 && iterationCount <= 1000,
             "iterationCount must be in [1, 1000] (got " + std::to_string(iterationCount) + ")");
-    require(detail::allFinite(gravity), "gravity must be finite");
+    require(detail::allFinite(gravity) && gravity.cwiseAbs().maxCoeff() <= limits::kMaxAcceleration, [&] {
+      return "gravity must be finite with components within +-1e6 m/s^2 (got (" + detail::formatNumber(gravity.x()) +
+             ", " + detail::formatNumber(gravity.y()) + ", " + detail::formatNumber(gravity.z()) + "))";
+    });
     requireRange(stretchCompliance, 0, 1e6, "stretchCompliance");
     requireRange(shearCompliance, 0, 1e6, "shearCompliance");
     requireRange(bendingCompliance, 0, 1e6, "bendingCompliance");
@@ -133,7 +136,7 @@ struct Settings {
                 collisionMethod == CollisionMethod::Vertices,
             "collisionMethod is not one of faces, vertices, in-solve");
     require(std::isfinite(thickness) && thickness > 0 && thickness <= 1,
-            "thickness must be in (0, 1] m (got " + std::to_string(thickness) + ")");
+            "thickness must be in (0, 1] m (got " + detail::formatNumber(thickness) + ")");
     requireRange(normalDamping, 0, 1, "normalDamping");
     require(pgdIterations >= 1 && pgdIterations <= 1000,
             "pgdIterations must be in [1, 1000] (got " + std::to_string(pgdIterations) + ")");

@@ -167,7 +167,7 @@ template <Scalar S> ClothAsset<S> ClothAsset<S>::sheet(const SheetDesc& desc, co
   detail::require(std::isfinite(desc.spacing) && desc.spacing > 0 &&
                       desc.spacing * std::max(desc.nx, desc.ny) <= 1e5,
                   "sheet spacing must be positive, finite and the sheet at most 1e5 m across (got spacing " +
-                      std::to_string(desc.spacing) + ")");
+                      detail::formatNumber(desc.spacing) + ")");
   detail::require(detail::allFinite(desc.placement.position) && desc.placement.position.cwiseAbs().maxCoeff() <= 1e7 &&
                       detail::allFinite(desc.placement.rotation.coeffs()) &&
                       std::abs(desc.placement.rotation.norm() - 1.0) < 1e-6,
@@ -231,6 +231,18 @@ ClothAsset<S> ClothAsset<S>::fromMesh(const std::vector<Vec3<S>>& positions,
     require(lmax > 0 && area2 > S(1e-6) * lmax * lmax,
             "triangle " + std::to_string(f) + " is degenerate (zero or near-zero area)");
   }
+  // The same three vertices twice, in either winding, would count the face's mass twice.
+  std::vector<std::pair<std::array<Index, 3>, std::size_t>> corners(triangles.size());
+  for (std::size_t f = 0; f < triangles.size(); ++f) {
+    corners[f] = {triangles[f], f};
+    std::sort(corners[f].first.begin(), corners[f].first.end());
+  }
+  std::sort(corners.begin(), corners.end());
+  for (std::size_t k = 1; k < corners.size(); ++k)
+    require(corners[k].first != corners[k - 1].first, [&] {
+      return "triangle " + std::to_string(corners[k].second) + " repeats triangle " +
+             std::to_string(corners[k - 1].second) + " (the same three vertices)";
+    });
   ClothAsset asset;
   asset.restPositions = positions;
   asset.triangles = triangles;

@@ -18,7 +18,7 @@ template <Scalar S> struct ClothState {
   /// the area of its faces.
   static ClothState fromAsset(const ClothAsset<S>& asset, double areaDensity) {
     detail::require(std::isfinite(areaDensity) && areaDensity > 0,
-                    "areaDensity must be positive and finite (got " + std::to_string(areaDensity) + " kg/m^2)");
+                    "areaDensity must be positive and finite (got " + detail::formatNumber(areaDensity) + " kg/m^2)");
     ClothState s;
     const Index n = asset.vertexCount();
     // Keep the local frame near the cloth from the start (offsets computed in double, then rounded once).

@@ -116,16 +116,16 @@ class RigidBody : public CoupledBody {
     require(detail::allFinite(state.pose.position), [&] { return name() + ": position must be finite"; });
     require(detail::allFinite(state.pose.rotation.coeffs()), [&] { return name() + ": rotation must be finite"; });
     require(std::abs(state.pose.rotation.norm() - 1) < 1e-6, [&] {
-      return name() + ": rotation must be a unit quaternion (norm " + std::to_string(state.pose.rotation.norm()) + ")";
+      return name() + ": rotation must be a unit quaternion (norm " + detail::formatNumber(state.pose.rotation.norm()) + ")";
     });
     require(detail::allFinite(state.linearVelocity), [&] { return name() + ": linear velocity must be finite"; });
     require(detail::allFinite(state.angularVelocity), [&] { return name() + ": angular velocity must be finite"; });
     require(motion == BodyMotion::Dynamic || motion == BodyMotion::Kinematic,
             [&] { return name() + ": motion is not dynamic or kinematic"; });
     require(std::isfinite(staticFriction) && staticFriction >= 0,
-            [&] { return name() + ": staticFriction must be >= 0 (got " + std::to_string(staticFriction) + ")"; });
+            [&] { return name() + ": staticFriction must be >= 0 (got " + detail::formatNumber(staticFriction) + ")"; });
     require(std::isfinite(dynamicFriction) && dynamicFriction >= 0,
-            [&] { return name() + ": dynamicFriction must be >= 0 (got " + std::to_string(dynamicFriction) + ")"; });
+            [&] { return name() + ": dynamicFriction must be >= 0 (got " + detail::formatNumber(dynamicFriction) + ")"; });
     require(std::isfinite(restitution) && restitution >= 0 && restitution <= 1, [&] {
       return name() + ": restitution must be in [0.000000, 1.000000] (got " + std::to_string(restitution) + ")";
     });

@@ -139,7 +139,7 @@ class RigidWorld {
   /// Advances by dt seconds in settings().subStepCount substeps. Forces and torques applied before the call
   /// act over the whole step, then are cleared.
   void step(double dt) {
-    detail::require(std::isfinite(dt) && dt > 0, "step: dt must be positive and finite (got " + std::to_string(dt) + ")");
+    detail::require(std::isfinite(dt) && dt > 0, "step: dt must be positive and finite (got " + detail::formatNumber(dt) + ")");
     validateBodies();
     const double h = dt / settings_.subStepCount;
     for (int s = 0; s < settings_.subStepCount; ++s) advance(h);
@@ -150,7 +150,7 @@ class RigidWorld {
   /// cleared: a cloth solver applies its contact forces every substep, then calls this.
   void subStep(double h) {
     detail::require(std::isfinite(h) && h > 0,
-                    [&] { return "subStep: h must be positive and finite (got " + std::to_string(h) + ")"; });
+                    [&] { return "subStep: h must be positive and finite (got " + detail::formatNumber(h) + ")"; });
     validateBodies();
     advance(h);
     for (auto& b : bodies_) b.clearForces();

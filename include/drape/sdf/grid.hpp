@@ -409,9 +409,9 @@ inline std::shared_ptr<const DistanceGrid> buildDistanceGrid(const TriangleMesh&
                                                              const DistanceGridOptions& options = {}) {
   using detail::require;
   require(std::isfinite(options.margin) && options.margin >= 0,
-          "distance grid margin must be finite and >= 0 (got " + std::to_string(options.margin) + ")");
+          "distance grid margin must be finite and >= 0 (got " + detail::formatNumber(options.margin) + ")");
   require(std::isfinite(options.cellSize) && options.cellSize >= 0,
-          "distance grid cellSize must be finite and >= 0 (got " + std::to_string(options.cellSize) + ")");
+          "distance grid cellSize must be finite and >= 0 (got " + detail::formatNumber(options.cellSize) + ")");
   require(options.cellSize > 0 || (options.resolution >= 2 && options.resolution <= 1024),
           "distance grid resolution must be in [2, 1024] (got " + std::to_string(options.resolution) + ")");
   validateClosedMesh(mesh);
@@ -435,7 +435,7 @@ inline std::shared_ptr<const DistanceGrid> buildDistanceGrid(const TriangleMesh&
     count[a] = Index(cells) + 1;
     total *= count[a];
   }
-  require(total <= double(1 << 26), "distance grid would need " + std::to_string(total) +
+  require(total <= double(1 << 26), "distance grid would need " + detail::formatNumber(total) +
                                         " nodes (at most 2^26, 1 GiB): raise cellSize or lower resolution");
 
   auto grid = std::make_shared<DistanceGrid>();

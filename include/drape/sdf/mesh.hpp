@@ -192,7 +192,7 @@ inline TriangleMesh makeBoxMesh(const Eigen::Vector3d& halfExtents) {
 inline TriangleMesh makeTorus(double R, double r, int segments, int sides) {
   detail::require(
       std::isfinite(R) && std::isfinite(r) && r > 0 && R > r,
-      "torus radii must be finite with R > r > 0 (got R = " + std::to_string(R) + ", r = " + std::to_string(r) + ")");
+      "torus radii must be finite with R > r > 0 (got R = " + detail::formatNumber(R) + ", r = " + detail::formatNumber(r) + ")");
   detail::require(segments >= 3 && sides >= 3, "torus needs at least 3 segments and 3 sides");
   TriangleMesh m;
   const double twoPi = 2 * std::numbers::pi;

@@ -10,16 +10,57 @@
 
 #include <tiny_obj_loader.h>
 
+#include <charconv>
+#include <cmath>
 #include <cstdio>
+#include <system_error>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <string>
 
 namespace drape {
 
+namespace detail {
+
+/// Throws drape::Error naming the line of the first vertex ('v') line of the OBJ text whose coordinates are not
+/// three finite numbers: the parser would read 'nan' or 'x' as 0 and the mesh would fail later for another
+/// reason.
+inline void checkObjVertices(std::istream& in, const std::string& path) {
+  std::string line;
+  for (long number = 1; std::getline(in, line); ++number) {
+    if (line.size() < 2 || line[0] != 'v' || (line[1] != ' ' && line[1] != '\t')) continue;
+    std::istringstream words(line.substr(2));
+    std::string word;
+    for (int k = 0; k < 3; ++k) {
+      const bool read = static_cast<bool>(words >> word);
+      // from_chars, unlike strtod, raises no floating-point exception (a program may trap them).
+      const char* first = word.data() + (read && word[0] == '+' ? 1 : 0);
+      const char* last = word.data() + word.size();
+      double value = 0;
+      const auto [end, status] = std::from_chars(first, read ? last : first, value);
+      require(read && status == std::errc() && end == last && std::isfinite(value), [&] {
+        return "OBJ file '" + path + "', line " + std::to_string(number) + ": vertex coordinate " +
+               std::to_string(k + 1) + (read ? " '" + word + "' is not a finite number in double's range" : " is missing");
+      });
+    }
+  }
+}
+
+}  // namespace detail
+
 /// Reads the vertices and faces of every object in an OBJ file into one mesh (polygons become triangle
 /// fans; normals, texture coordinates and materials are ignored). Throws drape::Error naming the file when it
-/// cannot be read or parsed, has no faces, or refers to a vertex it does not define. The mesh is not checked
+/// is a directory, cannot be read or parsed, has a vertex whose coordinates are not finite numbers (naming the
+/// line), has no faces, or refers to a vertex it does not define. The mesh is not checked
 /// for closedness here: buildDistanceGrid does that.
 inline TriangleMesh loadObj(const std::string& path) {
+  std::error_code error;
+  detail::require(!std::filesystem::is_directory(path, error), "OBJ path '" + path + "' is a directory, not a file");
+  {
+    std::ifstream in(path);
+    if (in) detail::checkObjVertices(in, path);  // an unreadable file is reported by the parser below
+  }
   tinyobj::ObjReaderConfig config;
   config.triangulate = true;
   config.vertex_color = false;

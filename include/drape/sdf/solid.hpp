@@ -105,11 +105,11 @@ template <class Shape> void validateSolid(const Solid<Shape>& s, const std::stri
           name + (s.body ? ": a body is given but the motion is not Motion::Dynamic"
                          : ": a Motion::Dynamic solid needs the body it follows"));
   require(std::isfinite(s.staticFriction) && s.staticFriction >= 0,
-          name + ": staticFriction must be >= 0 (got " + std::to_string(s.staticFriction) + ")");
+          name + ": staticFriction must be >= 0 (got " + detail::formatNumber(s.staticFriction) + ")");
   require(std::isfinite(s.dynamicFriction) && s.dynamicFriction >= 0,
-          name + ": dynamicFriction must be >= 0 (got " + std::to_string(s.dynamicFriction) + ")");
+          name + ": dynamicFriction must be >= 0 (got " + detail::formatNumber(s.dynamicFriction) + ")");
   require(std::isfinite(s.repulsion.radius) && s.repulsion.radius >= 0 && s.repulsion.radius <= 10,
-          name + ": repulsion radius must be in [0, 10] m (got " + std::to_string(s.repulsion.radius) + ")");
+          name + ": repulsion radius must be in [0, 10] m (got " + detail::formatNumber(s.repulsion.radius) + ")");
   require(s.repulsion.falloff == Falloff::Linear || s.repulsion.falloff == Falloff::Smooth,
           name + ": repulsion falloff is not a Falloff value");
   validateShape(s.shape);

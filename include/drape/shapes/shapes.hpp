@@ -33,27 +33,28 @@ struct Cylinder {
 
 namespace detail {
 
-inline void validateShape(const Plane&) {}
-inline void validateShape(const Sphere& s) {
-  require(std::isfinite(s.radius) && s.radius > 0, "sphere radius must be positive and finite (got " +
-                                                       std::to_string(s.radius) + ")");
-}
-inline void validateShape(const Box& b) {
-  require(detail::allFinite(b.halfExtents) && (b.halfExtents.array() > 0).all(),
-          "box half extents must be positive and finite");
-}
-inline void validateShape(const Capsule& c) {
-  require(std::isfinite(c.radius) && c.radius > 0, "capsule radius must be positive and finite (got " +
-                                                       std::to_string(c.radius) + ")");
-  require(std::isfinite(c.halfHeight) && c.halfHeight >= 0,
-          "capsule halfHeight must be non-negative and finite (got " + std::to_string(c.halfHeight) + ")");
+/// A shape's size: finite, above zero (or at zero where `zeroOk`) and at most limits::kMaxShapeSize.
+inline void requireSize(double value, bool zeroOk, const char* what) {
+  require(std::isfinite(value) && (value > 0 || (zeroOk && value == 0)) && value <= limits::kMaxShapeSize, [&] {
+    return std::string(what) + (zeroOk ? " must be in [0, " : " must be in (0, ") +
+           formatNumber(limits::kMaxShapeSize) + "] m (got " + formatNumber(value) + ")";
+  });
 }
 
+inline void validateShape(const Plane&) {}
+inline void validateShape(const Sphere& s) { requireSize(s.radius, false, "sphere radius"); }
+inline void validateShape(const Box& b) {
+  requireSize(b.halfExtents.x(), false, "box half extents: x");
+  requireSize(b.halfExtents.y(), false, "box half extents: y");
+  requireSize(b.halfExtents.z(), false, "box half extents: z");
+}
+inline void validateShape(const Capsule& c) {
+  requireSize(c.radius, false, "capsule radius");
+  requireSize(c.halfHeight, true, "capsule halfHeight");
+}
 inline void validateShape(const Cylinder& c) {
-  require(std::isfinite(c.radius) && c.radius > 0, "cylinder radius must be positive and finite (got " +
-                                                       std::to_string(c.radius) + ")");
-  require(std::isfinite(c.halfHeight) && c.halfHeight > 0,
-          "cylinder halfHeight must be positive and finite (got " + std::to_string(c.halfHeight) + ")");
+  requireSize(c.radius, false, "cylinder radius");
+  requireSize(c.halfHeight, false, "cylinder halfHeight");
 }
 
 }  // namespace detail
