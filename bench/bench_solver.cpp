@@ -4,6 +4,8 @@
 // two threads (substeps 5, iterations 1): the size and thread ratios come from one run of this binary.
 // meshDrop: a cloth dropped on meshed solids (grid fields), landing included.
 // ballDrop: a cloth dropped on a ball, landing included, with and without continuous contact.
+// undoableStep: the slope (faces, 10 substeps) stepped with an observer that may throw, so each step keeps its
+// start to be undone, against a noexcept one.
 #include "slope.hpp"
 
 #include <benchmark/benchmark.h>
@@ -35,6 +37,26 @@ void runSlope(benchmark::State& state, drape::CollisionMethod method, int subste
 
 template <class S, drape::CollisionMethod kMethod> void slopeStep(benchmark::State& state) {
   runSlope<S>(state, kMethod, int(state.range(0)), int(state.range(1)), 50, 80, 1);
+}
+
+void undoableStep(benchmark::State& state) {
+  drape::scenes::SlopeConfig c;
+  c.subSteps = 10;
+  c.base.threadCount = 1;
+  auto solver = drape::scenes::makeSlope<float>(c);
+  for (int f = 0; f < 90; ++f) solver.step(c.dt);
+  int substeps = 0;
+  for (auto _ : state) {
+    if (state.range(0) != 0)
+      solver.step(c.dt, [&](const auto&) { ++substeps; });
+    else
+      solver.step(c.dt, [&](const auto&) noexcept { ++substeps; });
+    benchmark::ClobberMemory();
+  }
+  state.counters["vertex_substep"] = benchmark::Counter(double(solver.vertexCount()) * c.subSteps,
+                                                        benchmark::Counter::kIsIterationInvariantRate |
+                                                            benchmark::Counter::kInvert);
+  benchmark::DoNotOptimize(substeps);
 }
 
 void slopeSize(benchmark::State& state) {
@@ -127,6 +149,9 @@ BENCHMARK(slopeStep<float, CollisionMethod::Faces>)->Apply(substepsAndIterations
 BENCHMARK(slopeStep<float, CollisionMethod::InSolve>)->Apply(substepsAndIterations);
 BENCHMARK(slopeStep<float, CollisionMethod::Vertices>)->Apply(substepsAndIterations);
 BENCHMARK(slopeStep<double, CollisionMethod::Faces>)->Apply(substepsAndIterations);
+// undoable 1: an observer that may throw; 0: a noexcept one.
+BENCHMARK(undoableStep)->ArgName("undoable")->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
+
 // side 50 means the 50x80 cloth; threads 1 or 2. Real time: with two threads, CPU time would count both.
 BENCHMARK(slopeSize)
     ->ArgNames({"side", "threads"})

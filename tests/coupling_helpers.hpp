@@ -6,6 +6,7 @@
 #include <drape/coupling/rigid_world.hpp>
 #include <drape/rigid/world.hpp>
 
+#include <limits>
 #include <memory>
 
 namespace drape::test {
@@ -59,6 +60,35 @@ inline RigidSettings emptySpace() {
   rigid.gravity.setZero();
   rigid.ground = false;
   return rigid;
+}
+
+/// A body held by an application's engine, as a coupled body sees it: a ball at rest at `at` until `broken`,
+/// then with a pose that is not finite (what an engine that diverged reports).
+struct BreakingBody : CoupledBody {
+  Eigen::Vector3d at = Eigen::Vector3d::Zero();
+  bool broken = false;
+  Pose pose() const override {
+    Pose p;
+    p.position = broken ? Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN()) : at;
+    return p;
+  }
+  Eigen::Vector3d linearVelocity() const override { return Eigen::Vector3d::Zero(); }
+  Eigen::Vector3d angularVelocity() const override { return Eigen::Vector3d::Zero(); }
+  double inverseMass() const override { return 1; }
+  Eigen::Matrix3d inverseInertiaWorld() const override { return Eigen::Matrix3d::Identity(); }
+  void applyForceAtPoint(const Eigen::Vector3d&, const Eigen::Vector3d&) override {}
+};
+
+/// A 20 x 20 cloth (1 cm) lying on a 4 cm ball held by `body` (friction 0.3), for the undone-step tests.
+template <class Solver> void layOnBreakingBall(Solver& cloth, BreakingBody& body) {
+  body.at = {0, 0, -0.04};
+  Solid<Sphere> ball;
+  ball.shape.radius = 0.04;
+  ball.motion = Motion::Dynamic;
+  ball.body = &body;
+  ball.pose.position = body.at;
+  ball.staticFriction = ball.dynamicFriction = 0.3;
+  cloth.addSolid(ball);
 }
 
 }  // namespace drape::test

@@ -9,13 +9,16 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <limits>
 #include <memory>
+#include <stdexcept>
 
 namespace {
 
 using drape::test::clothMomentum;
 using drape::test::emptySpace;
 using drape::test::squareCloth;
+using Catch::Contains;
 
 }  // namespace
 
@@ -359,5 +362,94 @@ TEST_CASE("Fig 6.5: a cloth launches a light ball; the three estimators' launch 
     CHECK(rising);
     CHECK(launch > drop / 3);
     CHECK(top <= start + 1e-3);  // no more energy out than in
+  }
+}
+
+// A step that fails midway is undone: a coupled body whose pose turns non-finite after five substeps (its engine
+// diverged), the world's body spoiled by an observer, and an observer that throws. The solver is then where it
+// was, bit for bit, and steps on exactly as one that never failed.
+TEMPLATE_TEST_CASE("a step that fails midway leaves the cloth, its solids and the world as they were",
+                   "[coupling][input]", float, double) {
+  using S = TestType;
+  using drape::test::BreakingBody;
+  auto sameState = [](const auto& a, const auto& b) {
+    for (drape::Index i = 0; i < a.vertexCount(); ++i)
+      if (a.position(i) != b.position(i) || a.velocity(i) != b.velocity(i)) return false;
+    return a.vertexCount() == b.vertexCount();
+  };
+  drape::Settings settings;
+  settings.threadCount = 1;
+  SECTION("a coupled body's pose turns non-finite") {
+    BreakingBody body, twin;
+    drape::Solver<S> cloth(squareCloth<S>(20, 0.01, 0.006), settings), reference(squareCloth<S>(20, 0.01, 0.006), settings);
+    drape::test::layOnBreakingBall(cloth, body);
+    drape::test::layOnBreakingBall(reference, twin);
+    for (int f = 0; f < 10; ++f) {
+      cloth.step(1.0 / 60);
+      reference.step(1.0 / 60);
+    }
+    REQUIRE(sameState(cloth, reference));
+    int substeps = 0;
+    CHECK_THROWS_WITH(cloth.step(1.0 / 60, [&](const auto&) { body.broken = ++substeps == 5; }),
+                      Contains("not finite") && Contains("undone"));
+    CHECK(substeps == 5);
+    CHECK(sameState(cloth, reference));
+    CHECK(cloth.state().origin == reference.state().origin);
+    body.broken = false;  // the engine recovered
+    for (int f = 0; f < 3; ++f) {
+      cloth.step(1.0 / 60);
+      reference.step(1.0 / 60);
+    }
+    CHECK(sameState(cloth, reference));
+  }
+  SECTION("a body of drape's world spoiled between substeps") {
+    auto scene = [&](drape::Solver<S>& cloth, drape::RigidWorld& world) {
+      drape::BodyDesc ball;
+      ball.shape = drape::Sphere{0.03};
+      ball.pose.position = {0, 0, 0.04};
+      ball.linearVelocity = {0, 0, -0.5};
+      ball.density = 300;
+      drape::addCoupledBody(cloth, world, world.add(ball));
+      drape::Solid<drape::Plane> floor;
+      cloth.addSolid(floor);
+    };
+    drape::Solver<S> cloth(squareCloth<S>(20, 0.01, 0.006), settings), reference(squareCloth<S>(20, 0.01, 0.006), settings);
+    drape::RigidWorld world, twin;
+    scene(cloth, world);
+    scene(reference, twin);
+    for (int f = 0; f < 5; ++f) {
+      drape::stepCoupled(cloth, world, 1.0 / 60);
+      drape::stepCoupled(reference, twin, 1.0 / 60);
+    }
+    REQUIRE(sameState(cloth, reference));
+    int substeps = 0;
+    auto spoil = [&](const auto&) {
+      if (++substeps == 5) world.body(0).state.angularVelocity.x() = std::numeric_limits<double>::infinity();
+    };
+    CHECK_THROWS_WITH(drape::stepCoupled(cloth, world, 1.0 / 60, spoil), Contains("undone"));
+    CHECK(sameState(cloth, reference));
+    CHECK(world.body(0).state.pose.position == twin.body(0).state.pose.position);
+    CHECK(world.body(0).state.linearVelocity == twin.body(0).state.linearVelocity);
+    CHECK(world.body(0).state.angularVelocity == twin.body(0).state.angularVelocity);
+    for (int f = 0; f < 3; ++f) {
+      drape::stepCoupled(cloth, world, 1.0 / 60);
+      drape::stepCoupled(reference, twin, 1.0 / 60);
+    }
+    CHECK(sameState(cloth, reference));
+    CHECK(world.body(0).state.pose.position == twin.body(0).state.pose.position);
+  }
+  SECTION("an observer throws its own exception") {
+    drape::Solver<S> cloth(squareCloth<S>(20, 0.01, 0.006), settings), reference(squareCloth<S>(20, 0.01, 0.006), settings);
+    drape::Solid<drape::Plane> floor;
+    cloth.addSolid(floor);
+    reference.addSolid(floor);
+    int substeps = 0;
+    CHECK_THROWS_AS(cloth.step(1.0 / 60, [&](const auto&) {
+      if (++substeps == 3) throw std::runtime_error("the application's own");
+    }), std::runtime_error);
+    CHECK(sameState(cloth, reference));
+    cloth.step(1.0 / 60);
+    reference.step(1.0 / 60);
+    CHECK(sameState(cloth, reference));
   }
 }

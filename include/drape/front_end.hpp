@@ -52,6 +52,7 @@ struct SolidFeatures {
 ///   template <class Shape> void checkSolid(const Solid<Shape>&);   the same for a solid
 ///   template <class Shape> void solidSet(Index k);   solid k of Shape was added or replaced (compiled_[k] holds it)
 ///   void beginStep();                       before a step's substeps (move the local origin)
+///   void keepStart(); void restoreStart();  keep the positions and velocities, put them back (an undone step)
 ///   void subStep(double h);
 template <class Backend, Scalar S, class... Shapes> class SolverFront {
  public:
@@ -204,10 +205,11 @@ template <class Backend, Scalar S, class... Shapes> class SolverFront {
 
   // --- stepping -------------------------------------------------------------------------------------------
   /// Advances by dt seconds in subStepCount substeps.
-  void step(double dt) {
-    step(dt, [](const Backend&) {});
-  }
-  /// The same, calling onSubStep(solver) after every substep (for metrics and tests).
+  void step(double dt) { step(dt, NoObserver{}); }
+  /// The same, calling onSubStep(solver) after every substep (for metrics, tests and engines stepped in
+  /// between). If a substep or the observer throws, the step is undone: the cloth and its solids are left as
+  /// they were, and the exception passes on. Keeping the start for that costs a copy of the state per step,
+  /// which a noexcept observer in a scene with no coupled body does not pay.
   template <class Observer> void step(double dt, Observer&& onSubStep) {
     detail::require(std::isfinite(dt) && dt > 0 && dt <= limits::kMaxStep,
                     [&] { return "step dt must be in (0, 10] s (got " + detail::formatNumber(dt) + ")"; });
@@ -215,11 +217,39 @@ template <class Backend, Scalar S, class... Shapes> class SolverFront {
       return "step dt / subStepCount must be at least 1e-6 s (got " +
              detail::formatNumber(dt / settings_.subStepCount) + ")";
     });
-    backend().beginStep();
     const double h = dt / settings_.subStepCount;
-    for (int sub = 0; sub < settings_.subStepCount; ++sub) {
-      backend().subStep(h);
-      onSubStep(std::as_const(backend()));
+    auto run = [&] {
+      backend().beginStep();
+      for (int sub = 0; sub < settings_.subStepCount; ++sub) {
+        backend().subStep(h);
+        onSubStep(std::as_const(backend()));
+      }
+    };
+    // Only an observer or a coupled body can fail in the middle of a step: a coupled body is read every
+    // substep and may turn non-finite when its engine steps between the substeps. Such a step keeps its start,
+    // to be undone (a noexcept observer spares the copy). Forces already passed to the bodies stay with their
+    // engine (stepCoupled restores drape's own).
+    if (std::is_nothrow_invocable_v<Observer&, const Backend&> && !hasDynamicSolid()) return run();
+    backend().keepStart();
+    start_.origin = state_.origin;
+    start_.solids = solids_;
+    start_.force = bodyForce_;
+    start_.torque = bodyTorque_;
+    auto undo = [&] {
+      state_.origin = start_.origin;
+      solids_ = start_.solids;
+      bodyForce_ = start_.force;
+      bodyTorque_ = start_.torque;
+      backend().restoreStart();
+    };
+    try {
+      run();
+    } catch (const Error& e) {
+      undo();
+      throw Error(std::string(e.what()) + " (the step was undone)");
+    } catch (...) {
+      undo();
+      throw;
     }
   }
 
@@ -233,6 +263,25 @@ template <class Backend, Scalar S, class... Shapes> class SolverFront {
       : asset_((detail::require(asset != nullptr, "the cloth asset is null"), std::move(asset))),
         settings_((settings.validate(), Backend::checkSettings(settings), settings)),
         state_(ClothState<S>::fromAsset(*asset_, areaDensity)) {}
+
+  struct NoObserver {
+    void operator()(const Backend&) const noexcept {}
+  };
+  /// What a step that can fail midway restores besides the cloth's positions and velocities, which the backend
+  /// keeps (keepStart, restoreStart). Kept between steps so that keeping it does not allocate.
+  struct StepStart {
+    Eigen::Vector3d origin;
+    std::tuple<std::vector<Solid<Shapes>>...> solids;
+    std::vector<Eigen::Vector3d> force, torque;
+  };
+  bool hasDynamicSolid() const {
+    return std::apply(
+        [](const auto&... lists) {
+          return (std::any_of(lists.begin(), lists.end(), [](const auto& s) { return s.motion == Motion::Dynamic; }) ||
+                  ... || false);
+        },
+        solids_);
+  }
 
   Backend& backend() { return static_cast<Backend&>(*this); }
   const Backend& backend() const { return static_cast<const Backend&>(*this); }
@@ -309,6 +358,7 @@ template <class Backend, Scalar S, class... Shapes> class SolverFront {
   /// ball's centre has no moment.
   std::vector<Eigen::Vector3d> bodyCentre_;
   std::vector<Eigen::Vector3d> bodyForce_, bodyTorque_;  ///< what the cloth passed to each, this substep
+  StepStart start_;  ///< the start of a step that may be undone
 };
 
 /// What templates that run a scene on any cloth solver (metrics, coupled bodies, scenes) may use of it.

@@ -86,6 +86,15 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     if (change == StateChange::Positions) passes_.positionsReplaced();
     if (change == StateChange::Masses) massesChanged_ = true;  // the lane copies are gathered again
   }
+  void keepStart() {
+    startX_ = state_.x;
+    startV_ = state_.v;
+  }
+  void restoreStart() {
+    state_.x = startX_;
+    state_.v = startV_;
+    passes_.positionsReplaced();
+  }
   static void checkSettings(const Settings&) {}  // the CPU runs every valid setting
   template <class Shape> static void checkSolid(const Solid<Shape>&) {}
   template <class Shape> void solidSet(Index) {}
@@ -398,6 +407,7 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
   std::vector<PinTarget<S>> pinLocal_;
   std::vector<Vec3<S>> xPrev_, xPredicted_;
   std::vector<Vec4<S>> packed_;   ///< (position, 0) of each vertex: what the constraint solve works on
+  std::vector<Vec3<S>> startX_, startV_;  ///< the state at the start of a step that may be undone
   /// The stretch, shear and bending sets as the float SIMD kernels read them, with their lanes' inverse masses
   /// (gatherLaneMasses); the asset holds the topology only.
   DistanceBlocks<S> blocks_[3];

@@ -8,6 +8,7 @@
 
 #include <type_traits>
 #include <variant>
+#include <vector>
 
 namespace drape {
 
@@ -51,14 +52,26 @@ Index addCoupledBody(ClothSolver& cloth, RigidWorld& world, int index, const Cou
 }
 
 /// Advances the cloth and the world by dt together: after each cloth substep has applied its contact forces,
-/// the world takes the same substep (its own subStepCount is not used). `onSubStep(cloth)` runs after both.
+/// the world takes the same substep (its own subStepCount is not used). `onSubStep(cloth)` runs after both. A
+/// drape::Error in any substep (a body turned non-finite) leaves the cloth, its solids and the world's bodies as
+/// they were before the step.
 template <class ClothSolver, class Observer>
 void stepCoupled(ClothSolver& cloth, RigidWorld& world, double dt, Observer&& onSubStep) {
   const double h = dt / cloth.settings().subStepCount;
-  cloth.step(dt, [&](const ClothSolver& c) {
-    world.subStep(h);
-    onSubStep(c);
-  });
+  std::vector<BodyState> start(std::size_t(world.bodyCount()));
+  for (int b = 0; b < world.bodyCount(); ++b) start[std::size_t(b)] = world.body(b).state;
+  try {
+    cloth.step(dt, [&](const ClothSolver& c) {
+      world.subStep(h);
+      onSubStep(c);
+    });
+  } catch (const Error&) {
+    for (int b = 0; b < world.bodyCount(); ++b) {
+      world.body(b).state = start[std::size_t(b)];
+      world.body(b).clearForces();
+    }
+    throw;
+  }
 }
 template <class ClothSolver> void stepCoupled(ClothSolver& cloth, RigidWorld& world, double dt) {
   stepCoupled(cloth, world, dt, [](const ClothSolver&) {});

@@ -156,6 +156,24 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
   // --- the front end's hooks (SolverFront) ------------------------------------------------------------------
   void loadState() const { download(); }
   void storeState(StateChange) { upload(); }
+  /// An undoable step's start: copies on the device, so keeping it costs no read-back.
+  void keepStart() {
+    context_->makeCurrent();
+    copyVertices(positions_, keptPositions_);
+    copyVertices(velocities_, keptVelocities_);
+  }
+  void restoreStart() {
+    context_->makeCurrent();
+    copyVertices(keptPositions_, positions_);
+    copyVertices(keptVelocities_, velocities_);
+    fresh_ = false;
+  }
+  void copyVertices(const Buffer<layout::Vertex>& from, Buffer<layout::Vertex>& to) {
+    const std::size_t n = state_.x.size();
+    if (to.size() != n) to.assign(std::vector<layout::Vertex>(n));
+    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+    glCopyNamedBufferSubData(from.id(), to.id(), 0, 0, GLsizeiptr(n * sizeof(layout::Vertex)));
+  }
   /// The settings the GPU does not run: it always culls (bounding boxes and spheres, which drop no contact) and
   /// its parallelism is the device's, so turning culling or the broad phase off, or asking for CPU threads,
   /// is an error rather than a setting silently ignored.
@@ -463,6 +481,7 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
   Buffer<std::array<std::uint32_t, 4>> faces_;  ///< the faces, colour by colour (colourFaces)
   std::vector<std::size_t> faceColourOffsets_;   ///< colour c is faces [offsets[c], offsets[c + 1])
   Buffer<layout::Vertex> positions_, velocities_, predicted_, packed_, start_, reduction_;
+  Buffer<layout::Vertex> keptPositions_, keptVelocities_;  ///< an undoable step's start (keepStart)
   Buffer<layout::Contact> contacts_;
   Buffer<layout::Ring> rings_;
   Buffer<std::uint32_t> neighbourOffsets_, neighbours_;
