@@ -50,6 +50,7 @@ struct SlopeResult {
   double tremblingRms = 0, tremblingMax = 0;  ///< as defined in docs/design.md §10
   double tremblingRmsCentred = 0, tremblingMaxCentred = 0;  ///< with each frame's mean normal velocity removed
   double acceleration = 0;         ///< fitted downhill acceleration of the centre of mass (m/s^2)
+  int fittedFrames = 0;            ///< frames the acceleration was fitted over (fitted only from kMinFitFrames)
   double analyticAcceleration = 0; ///< g (sin - mu cos) when tan > mu, else 0
   double creep = 0;                ///< mean downhill speed over the window (m/s)
   double maxPenetration = 0;       ///< below the surface (m)
@@ -57,6 +58,12 @@ struct SlopeResult {
   double meanStrain = 0, maxStrain = 0;
   double contactFraction = 0;
   bool finite = true;
+  /// Fewest frames in the window that fit an acceleration: two points always lie on a line.
+  static constexpr int kMinFitFrames = 3;
+  /// A cloth whose edges end more than twice their rest length apart no longer holds together: the run diverged.
+  static constexpr double kDivergedStrain = 1.0;
+  bool fitted() const { return fittedFrames >= kMinFitFrames; }
+  bool diverged() const { return !finite || maxStrain > kDivergedStrain; }
 };
 
 inline Eigen::Quaterniond slopeRotation(double angleDeg) {
@@ -226,7 +233,8 @@ SlopeResult runSlopeOn(SolverT& solver, const SlopeConfig& c, const std::functio
   r.tremblingRmsCentred = meter.rmsCentred();
   r.tremblingMaxCentred = meter.maxCentred();
   r.contactFraction = meter.contactFraction();
-  if (times.size() >= 2) {  // least-squares slope of speed over time
+  r.fittedFrames = int(times.size());
+  if (r.fitted()) {  // least-squares slope of speed over time
     double mt = 0, ms = 0;
     for (std::size_t k = 0; k < times.size(); ++k) mt += times[k], ms += speeds[k];
     mt /= times.size();

@@ -176,7 +176,10 @@ int main(int argc, char** argv) {
     j["trembling_max"] = r.tremblingMax;
     j["trembling_rms_centred"] = r.tremblingRmsCentred;
     j["trembling_max_centred"] = r.tremblingMaxCentred;
-    j["acceleration"] = r.acceleration;
+    if (r.fitted())
+      j["acceleration"] = r.acceleration;
+    else
+      j["acceleration"] = nullptr;
     j["analytic_acceleration"] = r.analyticAcceleration;
     j["creep"] = r.creep;
     j["max_penetration"] = r.maxPenetration;
@@ -185,17 +188,44 @@ int main(int argc, char** argv) {
     j["max_strain"] = r.maxStrain;
     j["contact_fraction"] = r.contactFraction;
     j["finite"] = r.finite;
+    j["diverged"] = r.diverged();
     if (json) std::cout << j.dump() << '\n';
+    char acceleration[64];
+    if (r.fitted())
+      std::snprintf(acceleration, sizeof acceleration, "%.4f m/s^2", r.acceleration);
+    else
+      std::snprintf(acceleration, sizeof acceleration, "not fitted (%d frames in the window)", r.fittedFrames);
     std::fprintf(stderr,
                  "%s: %s/%s %dx%d, %d substeps x %d iterations, %s, mu %.2f, %d frames: %.3f ms/frame "
-                 "(%.1f ns per vertex-substep)\n  trembling rms %.3g m/s (max %.3g), acceleration %.4f m/s^2 "
+                 "(%.1f ns per vertex-substep)\n  trembling rms %.3g m/s (max %.3g), acceleration %s "
                  "(analytic %.4f), creep %.3g m/s, penetration %.3g m, strain mean %.3g max %.3g, contact %.0f%%\n",
                  device.c_str(), method.c_str(), scalar.c_str(), c.nx, c.ny, c.subSteps, c.iterations,
                  c.ridge ? "ridge" : (std::to_string(int(std::lround(c.angleDeg))) + " deg").c_str(), c.friction,
-                 c.frames, r.msPerFrame, r.nsPerVertexSubstep, r.tremblingRms, r.tremblingMax, r.acceleration,
+                 c.frames, r.msPerFrame, r.nsPerVertexSubstep, r.tremblingRms, r.tremblingMax, acceleration,
                  r.analyticAcceleration, r.creep, r.maxPenetration, r.meanStrain, r.maxStrain,
                  100 * r.contactFraction);
-    return r.finite ? 0 : 3;
+    // Exit codes: 3, the run diverged and its figures mean nothing; 4, too short to fit the acceleration.
+    if (r.diverged()) {
+      char why[96];
+      if (r.finite)
+        std::snprintf(why, sizeof why, "edges up to %.3g times their rest length", 1 + r.maxStrain);
+      else
+        std::snprintf(why, sizeof why, "positions are not finite");
+      std::fprintf(stderr,
+                   "inclined_plane: the run diverged (%s): its figures are meaningless; try more substeps or a "
+                   "shorter --dt\n",
+                   why);
+      return 3;
+    }
+    if (!r.fitted()) {
+      int enough = c.frames;  // the fewest frames whose window holds kMinFitFrames
+      while (enough - std::clamp(int(c.windowStart * enough), 1, enough) < drape::scenes::SlopeResult::kMinFitFrames)
+        ++enough;
+      std::fprintf(stderr, "inclined_plane: %d frames are too few to fit an acceleration: run at least %d\n",
+                   c.frames, enough);
+      return 4;
+    }
+    return 0;
   } catch (const std::exception& e) {
     std::cerr << "inclined_plane: " << e.what() << '\n';
     return 2;
