@@ -140,6 +140,11 @@ TEST_CASE("closed-mesh validation names what is wrong", "[meshsdf]") {
   }
   {
     TriangleMesh m = box;
+    m.vertices[3].z() = 1e300;  // finite, but the field's arithmetic would overflow
+    fails(m, "vertex 3 is not finite or lies beyond 1e5 m");
+  }
+  {
+    TriangleMesh m = box;
     m.triangles[3][1] = 8;
     fails(m, "triangle 3 has vertex index 8 outside [0, 8)");
   }

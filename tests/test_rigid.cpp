@@ -124,6 +124,9 @@ TEST_CASE("bad shapes, masses, inertias and states are rejected, naming what is 
   CHECK(throwsWith([] { ConvexHull h({Vector3d(0, 0, 0), Vector3d(1, 0, 0), Vector3d(2, 0, 0), Vector3d(3, 0, 0)}); },
                    "collinear"));
   CHECK(throwsWith([] { ConvexHull h({Vector3d(0, 0, 0), Vector3d(1, 0, 0), Vector3d(0, 1, 0)}); }, "at least 4"));
+  CHECK(throwsWith([] { ConvexHull h({Vector3d(0, 0, 0), Vector3d(1, 0, 0), Vector3d(0, 1, 0), Vector3d(0, 0, 1e300)}); },
+                   "within 1e5 m"));
+  CHECK(throwsWith([] { RigidBody b(BodyDesc{Sphere{1e300}}); }, "sphere radius"));
   CHECK(throwsWith([] { massFromDensity(Sphere{}, 0); }, "density"));
   CHECK(throwsWith([] { massFromMass(Sphere{}, -2); }, "mass must be positive"));
   BodyDesc d{Box{}};

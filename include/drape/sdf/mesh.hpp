@@ -58,7 +58,8 @@ inline void validateClosedMesh(const TriangleMesh& mesh) {
   const Index nf = mesh.triangleCount();
   require(nf >= 4, "a closed mesh needs at least 4 triangles (got " + std::to_string(nf) + ")");
   for (Index v = 0; v < nv; ++v)
-    require(detail::allFinite(mesh.vertices[v]), "mesh vertex " + std::to_string(v) + " is not finite");
+    require(detail::allFinite(mesh.vertices[v]) && mesh.vertices[v].cwiseAbs().maxCoeff() <= limits::kMaxShapeSize,
+            [&] { return "mesh vertex " + std::to_string(v) + " is not finite or lies beyond 1e5 m"; });
 
   for (Index t = 0; t < nf; ++t) {
     const auto& f = mesh.triangles[t];

@@ -72,7 +72,9 @@ inline HullTriangle makeHullTriangle(const std::vector<Eigen::Vector3d>& p, int 
 inline void ConvexHull::build(const std::vector<Eigen::Vector3d>& points) {
   using detail::require;
   require(points.size() >= 4, "convex hull needs at least 4 points (got " + std::to_string(points.size()) + ")");
-  for (const auto& p : points) require(detail::allFinite(p), "convex hull points must be finite");
+  for (const auto& p : points)
+    require(detail::allFinite(p) && p.cwiseAbs().maxCoeff() <= limits::kMaxShapeSize,
+            "convex hull points must be finite and within 1e5 m of the hull's frame");
   const int n = static_cast<int>(points.size());
 
   Eigen::Vector3d lo = points[0], hi = points[0];
