@@ -8,6 +8,7 @@
 
 #include <limits>
 #include <memory>
+#include <string>
 
 namespace drape::test {
 
@@ -89,6 +90,47 @@ template <class Solver> void layOnBreakingBall(Solver& cloth, BreakingBody& body
   ball.pose.position = body.at;
   ball.staticFriction = ball.dynamicFriction = 0.3;
   cloth.addSolid(ball);
+}
+
+/// Whether two cloths have the same positions and velocities, bit for bit.
+template <class A, class B> bool sameClothState(const A& a, const B& b) {
+  if (a.vertexCount() != b.vertexCount()) return false;
+  for (Index i = 0; i < a.vertexCount(); ++i)
+    if (a.position(i) != b.position(i) || a.velocity(i) != b.velocity(i)) return false;
+  return true;
+}
+
+/// Twin cloths on breaking balls stepped 10 frames; then the first one's body breaks after the 5th substep of
+/// a step, which must throw and leave it as its twin; then, the body mended, both step 3 more frames.
+struct UndoneStep {
+  bool sameBefore = false, sameAfterFailure = false, sameOrigin = false, sameLater = false;
+  int substeps = 0;      ///< substeps the failed step observed
+  std::string message;   ///< what it threw (empty: nothing)
+};
+template <class Solver> UndoneStep breakMidStep(Solver& cloth, Solver& reference) {
+  BreakingBody body, twin;
+  layOnBreakingBall(cloth, body);
+  layOnBreakingBall(reference, twin);
+  UndoneStep out;
+  for (int f = 0; f < 10; ++f) {
+    cloth.step(1.0 / 60);
+    reference.step(1.0 / 60);
+  }
+  out.sameBefore = sameClothState(cloth, reference);
+  try {
+    cloth.step(1.0 / 60, [&](const Solver&) { body.broken = ++out.substeps == 5; });
+  } catch (const Error& e) {
+    out.message = e.what();
+  }
+  out.sameAfterFailure = sameClothState(cloth, reference);
+  out.sameOrigin = cloth.state().origin == reference.state().origin;
+  body.broken = false;  // the engine recovered
+  for (int f = 0; f < 3; ++f) {
+    cloth.step(1.0 / 60);
+    reference.step(1.0 / 60);
+  }
+  out.sameLater = sameClothState(cloth, reference);
+  return out;
 }
 
 }  // namespace drape::test
