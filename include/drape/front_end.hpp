@@ -10,6 +10,7 @@
 #include <drape/sdf/solid.hpp>
 #include <drape/settings.hpp>
 
+#include <algorithm>
 #include <concepts>
 #include <limits>
 #include <memory>

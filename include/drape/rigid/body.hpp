@@ -127,7 +127,7 @@ class RigidBody : public CoupledBody {
     require(std::isfinite(dynamicFriction) && dynamicFriction >= 0,
             [&] { return name() + ": dynamicFriction must be >= 0 (got " + detail::formatNumber(dynamicFriction) + ")"; });
     require(std::isfinite(restitution) && restitution >= 0 && restitution <= 1, [&] {
-      return name() + ": restitution must be in [0.000000, 1.000000] (got " + std::to_string(restitution) + ")";
+      return name() + ": restitution must be in [0, 1] (got " + detail::formatNumber(restitution) + ")";
     });
     require(detail::allFinite(force_) && detail::allFinite(torque_),
             [&] { return name() + ": accumulated force must be finite"; });

@@ -13,11 +13,11 @@
 #include <charconv>
 #include <cmath>
 #include <cstdio>
-#include <system_error>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <system_error>
 
 namespace drape {
 
