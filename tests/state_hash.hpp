@@ -17,6 +17,16 @@
 
 namespace drape::test {
 
+/// Whether this build may fuse a * b + c (-march=native on a processor with FMA, or -ffp-contract=fast with
+/// FMA available). Then every result rounds differently from the pinned runs, and two differently inlined
+/// copies of one expression may round differently from each other.
+constexpr bool kMayFuse =
+#if defined(__FMA__) || defined(__FP_FAST_FMA) || defined(__FP_FAST_FMAF)
+    true;
+#else
+    false;
+#endif
+
 /// 64-bit FNV-1a over raw bytes.
 class Fnv1a {
  public:

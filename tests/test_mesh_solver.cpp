@@ -58,9 +58,13 @@ TEMPLATE_TEST_CASE("a cloth dropped on a meshed ball rests on it like on the ana
   // Both stay out of their own field to a small fraction of the thickness...
   CHECK(analytic.worstMesh <= 0.05 * thickness);
   CHECK(meshed.worstMesh <= 0.05 * thickness);
-  // ...so the meshed run stays off the true ball up to the grid's error near the surface (half a cell, measured
-  // 0.05 cell) and the facets' sag (0.3 mm).
-  CHECK(meshed.deepest >= analytic.deepest - (0.1 * cell + 3e-4));
+  // ...so the meshed run stays off the true ball by the thickness, less what it is below its own field, the
+  // grid's error near the surface (half a cell, measured 0.05 cell) and the facets' sag (0.3 mm). The reference
+  // is the thickness, not the analytic run's closest vertex: that one rests a little above the thickness, by an
+  // amount that changes with the rounding (0.07 to 0.23 mm, the most in float where the build fuses
+  // multiply-adds), while the meshed run's closest vertex stays at 4.4-4.5 mm.
+  CHECK(analytic.deepest >= thickness - analytic.worstMesh - 1e-6);
+  CHECK(meshed.deepest >= thickness - meshed.worstMesh - (0.1 * cell + 3e-4));
   // It lies on the ball, not through it: the top of the cloth rests where the analytic run's does.
   CHECK(std::abs(meshed.top - analytic.top) <= 0.1 * cell + 3e-4 + 0.1 * thickness);
   CHECK(meshed.top >= kRadius);

@@ -36,16 +36,8 @@ const drape::test::PinnedHashes kPinned = {
 #include "state_hashes.inc"
 };
 
-/// Whether this build may fuse a * b + c (then every float result rounds differently from the pinned runs).
-constexpr bool kMayFuse =
-#if defined(__FMA__) || defined(__FP_FAST_FMA) || defined(__FP_FAST_FMAF)
-    true;
-#else
-    false;
-#endif
-
 void checkPinned(const std::string& name, std::uint64_t hash) {
-  drape::test::checkPinned(kPinned, name, hash, kMayFuse ? "built with fused multiply-adds" : "");
+  drape::test::checkPinned(kPinned, name, hash, drape::test::kMayFuse ? "built with fused multiply-adds" : "");
 }
 
 template <class S> const char* scalarName() { return std::is_same_v<S, float> ? "float" : "double"; }
