@@ -60,17 +60,23 @@ TEMPLATE_TEST_CASE("faces: a cloth resting on a floor or sliding down a slope do
 
 TEMPLATE_TEST_CASE("sliding down a 30 degree slope follows Coulomb's law", "[sliding]", float, double) {
   const double theta = rad(30);
+  // Only the motion is asserted here: penetration is measured once a frame, not after every substep.
+  const auto sliding = [](double angleDeg, int subSteps, double friction, CollisionMethod method) {
+    SlopeConfig c = slope(angleDeg, subSteps, friction, method);
+    c.penetrationEverySubstep = false;
+    return c;
+  };
   SECTION("frictionless: g sin(theta) within 2 %") {
-    const auto r = runSlope<TestType>(slope(30, 10, 0.0, CollisionMethod::Faces));
+    const auto r = runSlope<TestType>(sliding(30, 10, 0.0, CollisionMethod::Faces));
     CHECK(r.acceleration == Approx(kG * std::sin(theta)).epsilon(0.02));
   }
   SECTION("mu = 0.3: g (sin - mu cos) within 2 %") {
-    const auto r = runSlope<TestType>(slope(30, 10, 0.3, CollisionMethod::Faces));
+    const auto r = runSlope<TestType>(sliding(30, 10, 0.3, CollisionMethod::Faces));
     CHECK(r.acceleration == Approx(kG * (std::sin(theta) - 0.3 * std::cos(theta))).epsilon(0.02));
   }
   SECTION("mu = 0.8 sticks: creep below 1e-4 m/s") {
     for (int subSteps : drape::test::kSanitized ? std::vector{1} : std::vector{1, 5, 10}) {
-      const auto r = runSlope<TestType>(slope(30, subSteps, 0.8, CollisionMethod::Faces));
+      const auto r = runSlope<TestType>(sliding(30, subSteps, 0.8, CollisionMethod::Faces));
       INFO("substeps " << subSteps);
       CHECK(std::abs(r.creep) < 1e-4);
     }
