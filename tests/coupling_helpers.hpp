@@ -8,6 +8,7 @@
 
 #include <limits>
 #include <memory>
+#include <stdexcept>
 #include <string>
 
 namespace drape::test {
@@ -67,7 +68,8 @@ inline RigidSettings emptySpace() {
 /// then with a pose that is not finite (what an engine that diverged reports).
 struct BreakingBody : CoupledBody {
   Eigen::Vector3d at = Eigen::Vector3d::Zero();
-  bool broken = false;
+  bool broken = false;  ///< its pose turns non-finite
+  bool refuses = false;  ///< it throws where the cloth pushes it, as an application's engine might
   Pose pose() const override {
     Pose p;
     p.position = broken ? Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN()) : at;
@@ -77,7 +79,9 @@ struct BreakingBody : CoupledBody {
   Eigen::Vector3d angularVelocity() const override { return Eigen::Vector3d::Zero(); }
   double inverseMass() const override { return 1; }
   Eigen::Matrix3d inverseInertiaWorld() const override { return Eigen::Matrix3d::Identity(); }
-  void applyForceAtPoint(const Eigen::Vector3d&, const Eigen::Vector3d&) override {}
+  void applyForceAtPoint(const Eigen::Vector3d&, const Eigen::Vector3d&) override {
+    if (refuses) throw std::runtime_error("the engine refused the force");
+  }
 };
 
 /// A 20 x 20 cloth (1 cm) lying on a 4 cm ball held by `body` (friction 0.3), for the undone-step tests.
@@ -100,14 +104,15 @@ template <class A, class B> bool sameClothState(const A& a, const B& b) {
   return true;
 }
 
-/// Twin cloths on breaking balls stepped 10 frames; then the first one's body breaks after the 5th substep of
-/// a step, which must throw and leave it as its twin; then, the body mended, both step 3 more frames.
+/// Twin cloths on breaking balls stepped 10 frames; then the first one's body breaks (or, with `refuse`,
+/// refuses the cloth's push) after the 5th substep of a step, which must throw and leave it as its twin; then,
+/// the body mended, both step 3 more frames.
 struct UndoneStep {
   bool sameBefore = false, sameAfterFailure = false, sameOrigin = false, sameLater = false;
   int substeps = 0;      ///< substeps the failed step observed
   std::string message;   ///< what it threw (empty: nothing)
 };
-template <class Solver> UndoneStep breakMidStep(Solver& cloth, Solver& reference) {
+template <class Solver> UndoneStep breakMidStep(Solver& cloth, Solver& reference, bool refuse = false) {
   BreakingBody body, twin;
   layOnBreakingBall(cloth, body);
   layOnBreakingBall(reference, twin);
@@ -118,13 +123,13 @@ template <class Solver> UndoneStep breakMidStep(Solver& cloth, Solver& reference
   }
   out.sameBefore = sameClothState(cloth, reference);
   try {
-    cloth.step(1.0 / 60, [&](const Solver&) { body.broken = ++out.substeps == 5; });
-  } catch (const Error& e) {
+    cloth.step(1.0 / 60, [&](const Solver&) { (refuse ? body.refuses : body.broken) = ++out.substeps == 5; });
+  } catch (const std::exception& e) {
     out.message = e.what();
   }
   out.sameAfterFailure = sameClothState(cloth, reference);
   out.sameOrigin = cloth.state().origin == reference.state().origin;
-  body.broken = false;  // the engine recovered
+  body.broken = body.refuses = false;  // the engine recovered
   for (int f = 0; f < 3; ++f) {
     cloth.step(1.0 / 60);
     reference.step(1.0 / 60);

@@ -385,6 +385,18 @@ TEMPLATE_TEST_CASE("a step that fails midway leaves the cloth, its solids and th
     CHECK(r.sameOrigin);
     CHECK(r.sameLater);
   }
+  SECTION("a coupled body refuses the cloth's push, on one thread and on two") {
+    // The push is applied inside the threads' team, which an exception may not leave: it is rethrown after.
+    settings.threadCount = GENERATE(1, 2);
+    drape::Solver<S> cloth(squareCloth<S>(20, 0.01, 0.006), settings), reference(squareCloth<S>(20, 0.01, 0.006), settings);
+    const auto r = drape::test::breakMidStep(cloth, reference, true);
+    REQUIRE(r.sameBefore);
+    CHECK(r.message == "the engine refused the force");
+    CHECK(r.substeps == 5);
+    CHECK(r.sameAfterFailure);
+    CHECK(r.sameOrigin);
+    CHECK(r.sameLater);
+  }
   SECTION("a body of drape's world spoiled between substeps") {
     auto scene = [&](drape::Solver<S>& cloth, drape::RigidWorld& world) {
       drape::BodyDesc ball;

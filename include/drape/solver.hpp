@@ -23,6 +23,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <exception>
 #include <limits>
 #include <memory>
 #include <tuple>
@@ -152,6 +153,8 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     } else {
       subStepBody(S(hd));
     }
+    // An exception may not leave a team (the program would terminate): one thrown inside it is kept until here.
+    if (teamError_) std::rethrow_exception(std::exchange(teamError_, nullptr));
   }
 
   /// One substep's stages (docs/design.md §1), run by every thread of the team.
@@ -172,9 +175,13 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     if (coupled_) {
       DRAPE_OMP(single)
       {
-        gatherContactForces(h, S(this->settings_.thickness));
-        for (std::size_t b = 0; b < this->bodies_.size(); ++b)
-          this->bodies_[b]->applyForceAndTorque(this->bodyForce_[b], this->bodyTorque_[b]);
+        try {  // an application's body may refuse the push
+          gatherContactForces(h, S(this->settings_.thickness));
+          for (std::size_t b = 0; b < this->bodies_.size(); ++b)
+            this->bodies_[b]->applyForceAndTorque(this->bodyForce_[b], this->bodyTorque_[b]);
+        } catch (...) {
+          teamError_ = std::current_exception();
+        }
       }
     }
   }
@@ -418,6 +425,7 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
   bool repulsive_ = false;    ///< some solid has a repulsion region this substep
   bool reconcile_ = false;    ///< a vertex may touch several surfaces this substep
   bool coupled_ = false;      ///< some solid is a dynamic body this substep
+  std::exception_ptr teamError_;  ///< what a body threw inside the threads' team, rethrown after it
   bool sweep_ = false;        ///< continuous contact searches the paths this substep (a bounded solid exists)
   S travel_ = 0;              ///< the substep's farthest vertex travel (shared by the team)
   bool massesChanged_ = false;  ///< an inverse mass changed since the lane copies were gathered
