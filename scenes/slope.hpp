@@ -13,6 +13,7 @@
 #include <fstream>
 #include <functional>
 #include <numbers>
+#include <numeric>
 #include <string>
 #include <vector>
 
@@ -47,6 +48,8 @@ struct SlopeResult {
   int vertices = 0, faces = 0;
   double msPerFrame = 0;          ///< median wall time of step() (single thread)
   double nsPerVertexSubstep = 0;
+  double meanMsPerFrame = 0;      ///< mean wall time of step() over the whole run, the landing included
+  double meanNsPerVertexSubstep = 0;
   double tremblingRms = 0, tremblingMax = 0;  ///< as defined in docs/design.md §10
   double tremblingRmsCentred = 0, tremblingMaxCentred = 0;  ///< with each frame's mean normal velocity removed
   double acceleration = 0;         ///< fitted downhill acceleration of the centre of mass (m/s^2)
@@ -228,6 +231,8 @@ SlopeResult runSlopeOn(SolverT& solver, const SlopeConfig& c, const std::functio
   std::sort(sorted.begin(), sorted.end());
   r.msPerFrame = sorted[sorted.size() / 2];
   r.nsPerVertexSubstep = r.msPerFrame * 1e6 / (double(n) * c.subSteps);
+  r.meanMsPerFrame = std::accumulate(frameMs.begin(), frameMs.end(), 0.0) / double(frameMs.size());
+  r.meanNsPerVertexSubstep = r.meanMsPerFrame * 1e6 / (double(n) * c.subSteps);
   r.tremblingRms = meter.rms();
   r.tremblingMax = meter.max();
   r.tremblingRmsCentred = meter.rmsCentred();

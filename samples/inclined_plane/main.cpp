@@ -172,6 +172,8 @@ int main(int argc, char** argv) {
     j["dt"] = c.dt;
     j["ms_per_frame"] = r.msPerFrame;
     j["ns_per_vertex_substep"] = r.nsPerVertexSubstep;
+    j["mean_ms_per_frame"] = r.meanMsPerFrame;  // the whole run, the landing included
+    j["mean_ns_per_vertex_substep"] = r.meanNsPerVertexSubstep;
     j["trembling_rms"] = r.tremblingRms;
     j["trembling_max"] = r.tremblingMax;
     j["trembling_rms_centred"] = r.tremblingRmsCentred;
@@ -197,11 +199,11 @@ int main(int argc, char** argv) {
       std::snprintf(acceleration, sizeof acceleration, "not fitted (%d frames in the window)", r.fittedFrames);
     std::fprintf(stderr,
                  "%s: %s/%s %dx%d, %d substeps x %d iterations, %s, mu %.2f, %d frames: %.3f ms/frame "
-                 "(%.1f ns per vertex-substep)\n  trembling rms %.3g m/s (max %.3g), acceleration %s "
+                 "(%.1f ns per vertex-substep; mean %.1f with the landing)\n  trembling rms %.3g m/s (max %.3g), acceleration %s "
                  "(analytic %.4f), creep %.3g m/s, penetration %.3g m, strain mean %.3g max %.3g, contact %.0f%%\n",
                  device.c_str(), method.c_str(), scalar.c_str(), c.nx, c.ny, c.subSteps, c.iterations,
                  c.ridge ? "ridge" : (std::to_string(int(std::lround(c.angleDeg))) + " deg").c_str(), c.friction,
-                 c.frames, r.msPerFrame, r.nsPerVertexSubstep, r.tremblingRms, r.tremblingMax, acceleration,
+                 c.frames, r.msPerFrame, r.nsPerVertexSubstep, r.meanNsPerVertexSubstep, r.tremblingRms, r.tremblingMax, acceleration,
                  r.analyticAcceleration, r.creep, r.maxPenetration, r.meanStrain, r.maxStrain,
                  100 * r.contactFraction);
     // Exit codes: 3, the run diverged and its figures mean nothing; 4, too short to fit the acceleration.
