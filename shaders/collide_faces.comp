@@ -272,9 +272,69 @@ float boundOnTriangle(vec3 u0, vec3 u1, vec3 u2, out vec3 at, out float middleVa
 }
 #endif
 
+#if DRAPE_SHAPE == DRAPE_SHAPE_SPHERE
+// The point of the triangle (a, b, c) nearest to p as barycentric weights w (nearestOnTriangle in
+// include/drape/collision/pgd.hpp and nearestRegion in include/drape/detail/triangle.hpp, step for step); false for
+// a triangle too flat for the interior's weights.
+bool nearestOnTriangle(vec3 p, vec3 a, vec3 b, vec3 c, out vec3 w) {
+  precise const vec3 ab = b - a, ac = c - a, ap = p - a;
+  precise const float d1 = dot3(ab, ap), d2 = dot3(ac, ap);
+  w = vec3(1.0, 0.0, 0.0);
+  if (d1 <= 0.0 && d2 <= 0.0) return true;
+  precise const vec3 bp = p - b;
+  precise const float d3 = dot3(ab, bp), d4 = dot3(ac, bp);
+  w = vec3(0.0, 1.0, 0.0);
+  if (d3 >= 0.0 && d4 <= d3) return true;
+  precise const float vc = d1 * d4 - d3 * d2;
+  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
+    precise const float s = d1 / (d1 - d3);
+    w = vec3(1.0 - s, s, 0.0);
+    return true;
+  }
+  precise const vec3 cp = p - c;
+  precise const float d5 = dot3(ab, cp), d6 = dot3(ac, cp);
+  w = vec3(0.0, 0.0, 1.0);
+  if (d6 >= 0.0 && d5 <= d6) return true;
+  precise const float vb = d5 * d2 - d1 * d6;
+  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
+    precise const float s = d2 / (d2 - d6);
+    w = vec3(1.0 - s, 0.0, s);
+    return true;
+  }
+  precise const float va = d3 * d6 - d5 * d4;
+  precise const float d43 = d4 - d3, d56 = d5 - d6;
+  if (va <= 0.0 && d43 >= 0.0 && d56 >= 0.0) {
+    precise const float s = d43 / (d43 + d56);
+    w = vec3(0.0, 1.0 - s, s);
+    return true;
+  }
+  precise const float sum = (va + vb) + vc;
+  precise const float inverse = 1.0 / sum;
+  precise const float s = vb * inverse, t = vc * inverse;
+  w = vec3((1.0 - s) - t, s, t);
+  return va >= 0.0 && vb >= 0.0 && vc >= 0.0 && sum > 0.0;
+}
+#endif
+
 // One face against the field (queryFace): the bounding-sphere cull and, if the face may come within `margin`, its
 // deepest point (barycentric qb, point qp, normal qn, distance qphi). False when culled.
 bool searchFace(vec3 x0, vec3 x1, vec3 x2, float margin, out vec3 qb, out vec3 qn, out vec3 qp, out float qphi) {
+#if DRAPE_SHAPE == DRAPE_SHAPE_SPHERE
+  // A ball is deepest where the face is nearest its centre: the closed form of nearestOnTriangle
+  // (include/drape/collision/pgd.hpp), culled by the squared distance.
+  {
+    vec3 nb;
+    if (nearestOnTriangle(shape[0].xyz, x0, x1, x2, nb)) {
+      precise const vec3 p = (x0 + nb.y * (x1 - x0)) + nb.z * (x2 - x0);
+      precise const vec3 d = p - shape[0].xyz;
+      precise const float reach = shape[0].w + margin;
+      if (dot3(d, d) > reach * reach) return false;
+      qb = nb, qp = p;
+      qphi = sdf(p, qn);
+      return true;
+    }
+  }
+#endif
   // Bounding sphere and cull (faceSphere, queryFace).
   precise const vec3 middle = ((x0 + x1) + x2) / 3.0;
   precise const float r2 = max(max(dot3(x0 - middle, x0 - middle), dot3(x1 - middle, x1 - middle)),

@@ -281,6 +281,97 @@ TEMPLATE_TEST_CASE("PGD finds a face's deepest point within 1e-3 edge of brute f
 }
 
 // ============================================================================================================
+// 2b. The ball's closed form
+
+namespace {
+
+/// The distance from p to the triangle t, in double, by another route than nearestOnTriangle's: the projection
+/// onto the plane where it falls inside, else the nearest of the three edges.
+double distanceToTriangle(const V3& p, const std::array<V3, 3>& t) {
+  auto toSegment = [&](const V3& a, const V3& b) {
+    const V3 ab = b - a;
+    const double len2 = ab.squaredNorm();
+    const double s = len2 > 0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
+    return (a + s * ab - p).norm();
+  };
+  double best = std::min({toSegment(t[0], t[1]), toSegment(t[1], t[2]), toSegment(t[2], t[0])});
+  const V3 n = (t[1] - t[0]).cross(t[2] - t[0]);
+  if (n.squaredNorm() > 0) {
+    const V3 u = n.normalized();
+    const V3 q = p - u.dot(p - t[0]) * u;
+    bool inside = true;
+    for (int k = 0; k < 3; ++k) inside = inside && (t[(k + 1) % 3] - t[k]).cross(q - t[k]).dot(n) >= 0;
+    if (inside) best = std::min(best, (q - p).norm());
+  }
+  return best;
+}
+
+}  // namespace
+
+TEMPLATE_TEST_CASE("on a ball the face search is the face's point nearest the centre, exact to rounding", "[pgd]",
+                   float, double) {
+  using S = TestType;
+  constexpr S eps = std::numeric_limits<S>::epsilon();
+  const S thickness = S(drape::Settings{}.thickness);
+  const int iterations = drape::Settings{}.pgdIterations;
+  std::mt19937 rng(515);
+  for (const double radius : {0.3, 0.005}) {
+    const drape::Pose pose{randomRotation(rng), kWorld + randomInBall(rng, 0.2)};
+    const auto sdf = drape::detail::compileSdf<S>(drape::Sphere{radius}, pose, kOrigin);
+    int closedForm = 0, culled = 0, flat = 0;
+    double worst = 0;
+    for (int k = 0; k < 600; ++k) {
+      const double reach = k % 3 == 0 ? 0.02 : 0.006;
+      const V3 near = radius > kEdge ? V3(pose.position + (radius + uniform(rng, -reach, reach)) * randomUnit(rng))
+                                     : V3(pose.position + randomInBall(rng, radius + reach));
+      Tri tri = randomTriangle(rng, near, kEdge);
+      if (k % 10 == 1) tri.x[2] = tri.x[0] + uniform(rng, 1e-4, 1e-2) * (tri.x[2] - tri.x[0]);  // a sliver
+      if (k % 10 == 3) {  // the centre on the face: its distance is 0
+        const V3 shift = pose.position - (0.2 * tri.x[0] + 0.5 * tri.x[1] + 0.3 * tri.x[2]);
+        for (V3& v : tri.x) v += shift;
+      }
+      auto x = toLocal<S>(tri, kOrigin);
+      if (k % 10 == 2) x[2] = S(0.5) * (x[0] + x[1]);  // no area, as rounding leaves it
+      // The reference in the frame the field was compiled in, from what the search saw.
+      const std::array<V3, 3> seen = {x[0].template cast<double>(), x[1].template cast<double>(),
+                                      x[2].template cast<double>()};
+      const double exact = distanceToTriangle(sdf.centre.template cast<double>(), seen) - double(sdf.radius);
+      drape::FaceQuery<S> q;
+      REQUIRE(drape::queryFace<false>(sdf, x[0], x[1], x[2], S(0), iterations, q));
+      const S brute = bruteMinimum<S>(sdf, x, 200);
+      const double edge = tri.meanEdge();
+      // Rounding: the coordinates (within a metre of the local origin) and the centre's distance.
+      const double tolerance = 64 * double(eps);
+      INFO("radius " << radius << " triangle " << k << ": search " << q.phi << " (b = " << q.barycentric.transpose()
+                     << "), exact " << exact << ", brute " << brute);
+      CHECK(q.barycentric.allFinite());
+      CHECK((q.barycentric.array() >= S(0)).all());
+      CHECK(double(q.phi) <= double(brute) + 1e-3 * edge);
+      Vec3<S> g;
+      CHECK(std::abs(double(sdf(q.point, g) - q.phi)) <= tolerance);
+      Vec3<S> b;
+      if (drape::nearestOnTriangle<S>(sdf.centre, x[0], x[1], x[2], b)) {
+        ++closedForm;
+        worst = std::max(worst, std::abs(double(q.phi) - exact));
+        CHECK(std::abs(double(q.phi) - exact) <= tolerance);
+      } else {
+        ++flat;  // searched by the cutting planes
+      }
+      // The culling search drops only faces clear of the thickness.
+      drape::FaceQuery<S> kept;
+      if (!drape::queryFace<true>(sdf, x[0], x[1], x[2], thickness, iterations, kept)) {
+        ++culled;
+        CHECK(exact > double(thickness) - tolerance);
+      }
+    }
+    std::printf("[pgd] %-6s ball r=%g: closed form on %d faces, worst |search - exact| %.1e m, %d flat, %d culled\n",
+                sizeof(S) == 4 ? "float" : "double", radius, closedForm, worst, flat, culled);
+    CHECK(closedForm >= 500);
+    CHECK(culled > 0);
+  }
+}
+
+// ============================================================================================================
 // 3. Culling
 
 TEMPLATE_TEST_CASE("bounding-sphere culling never rejects a face within the thickness", "[culling]", float, double) {

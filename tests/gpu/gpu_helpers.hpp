@@ -29,10 +29,10 @@ template <class A, class B> double largestDifference(const A& a, const B& b) {
 }
 
 /// What a scene stepped side by side on the CPU and the GPU solver gave: the deepest penetration of each, the
-/// largest gap between the cloth centres' heights, the CPU cloth's final centre height, and the trembling of each
-/// from frame `settleFrames` on.
+/// largest gap between the cloth centres' heights (over the run, and from frame `settleFrames` on), the CPU cloth's
+/// final centre height, and the trembling of each from frame `settleFrames` on.
 struct SideBySide {
-  double cpuDepth = 0, gpuDepth = 0, heightGap = 0, cpuZ = 0;
+  double cpuDepth = 0, gpuDepth = 0, heightGap = 0, restHeightGap = 0, cpuZ = 0;
   TrembleMeter cpuMeter, gpuMeter;
 };
 template <class Cpu> SideBySide stepSideBySide(Cpu& cpu, gpu::Solver& gpu, int frames, int settleFrames, double dt = 1.0 / 60) {
@@ -46,6 +46,7 @@ template <class Cpu> SideBySide stepSideBySide(Cpu& cpu, gpu::Solver& gpu, int f
     for (Index i = 0; i < cpu.vertexCount(); ++i) zc += cpu.position(i).z(), zg += gpu.position(i).z();
     r.cpuZ = zc / double(cpu.vertexCount());
     r.heightGap = std::max(r.heightGap, std::abs(zc - zg) / double(cpu.vertexCount()));
+    if (frame > settleFrames) r.restHeightGap = std::max(r.restHeightGap, std::abs(zc - zg) / double(cpu.vertexCount()));
     r.cpuMeter.frame(cpu, dt, frame > settleFrames);
     r.gpuMeter.frame(gpu, dt, frame > settleFrames);
   }

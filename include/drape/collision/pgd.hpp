@@ -2,6 +2,7 @@
 // The deepest point of a face in a solid: bounding-sphere culling, and a cutting-plane search over the face's
 // barycentric simplex (in place of the projected gradient descent of the SDF collision paper, Fig 1).
 
+#include <drape/detail/triangle.hpp>
 #include <drape/kernel_constants.hpp>
 #include <drape/math.hpp>
 
@@ -31,6 +32,25 @@ template <Scalar S> Vec3<S> projectToSimplex(const Vec3<S>& y) {
     if (u[j] - t > S(0)) theta = t;
   }
   return (y.array() - theta).cwiseMax(S(0)).matrix();
+}
+
+/// The point of the triangle (x0, x1, x2) nearest to p, as barycentric weights (detail::nearestRegion). False
+/// for a triangle too flat for the interior's weights, which the caller searches otherwise.
+template <Scalar S>
+bool nearestOnTriangle(const Vec3<S>& p, const Vec3<S>& x0, const Vec3<S>& x1, const Vec3<S>& x2, Vec3<S>& b) {
+  using F = detail::TriangleFeature;
+  const detail::TriangleRegion<S> r = detail::nearestRegion<S>(p, x0, x1, x2);
+  switch (r.feature) {
+    case F::VertexA: b = Vec3<S>(1, 0, 0); return true;
+    case F::VertexB: b = Vec3<S>(0, 1, 0); return true;
+    case F::VertexC: b = Vec3<S>(0, 0, 1); return true;
+    case F::EdgeAB: b = Vec3<S>(S(1) - r.s, r.s, 0); return true;
+    case F::EdgeCA: b = Vec3<S>(S(1) - r.s, 0, r.s); return true;
+    case F::EdgeBC: b = Vec3<S>(0, S(1) - r.s, r.s); return true;
+    case F::Face: break;
+  }
+  b = Vec3<S>(S(1) - r.s - r.t, r.s, r.t);
+  return !r.flat;
 }
 
 /// Bounding sphere of a face: centre at the centroid, radius the largest centroid-to-vertex distance.
@@ -212,6 +232,22 @@ template <class Field> constexpr double lipschitzOf() {
 template <bool kCull, Scalar S, class Field>
 bool queryFace(const Field& sdf, const Vec3<S>& x0, const Vec3<S>& x1, const Vec3<S>& x2, S margin,
                int maxIterations, FaceQuery<S>& q, bool exactSearch = true) {
+  if constexpr (requires { Field::kPointCore; }) {
+    // The distance to a point less a radius (a ball) is deepest where the face is nearest that point: found in
+    // closed form, exact to rounding, where cutting planes close in on a curved field one cut at a time. The
+    // exact minimum culls by itself, so the bounding sphere is not needed.
+    Vec3<S> b;
+    if (nearestOnTriangle<S>(sdf.centre, x0, x1, x2, b)) {
+      const Vec3<S> p = x0 + b[1] * (x1 - x0) + b[2] * (x2 - x0);
+      // Most faces near a ball are clear of it: told by the squared distance, without a root or a division.
+      const S reach = sdf.radius + margin;
+      if (kCull && (p - sdf.centre).squaredNorm() > reach * reach) return false;
+      Vec3<S> n;
+      const S phi = sdf(p, n);
+      q = {b, p, n, phi, 1};
+      return true;
+    }
+  }
   const FaceSphere<S> sphere = faceSphere<S>(x0, x1, x2);
   if constexpr (kCull && requires { sdf.lowerBound(sphere.centre); }) {
     // A field with a cheap lower bound culls with it first: where the bound clears the sphere, phi does too.

@@ -19,6 +19,7 @@
 // The returned gradient is the trilinearly interpolated node normal, normalised (smooth and exact at the
 // nodes, where the gradient of the trilinear field would be a piecewise-bilinear, non-unit approximation).
 
+#include <drape/detail/triangle.hpp>
 #include <drape/sdf/grid_search.hpp>
 #include <drape/sdf/mesh.hpp>
 #include <drape/sdf/shapes.hpp>
@@ -63,37 +64,28 @@ struct DistanceGridOptions {
 
 namespace detail {
 
-/// Where on a triangle the closest point lies: a vertex, an edge (named by its two corners) or the face.
-enum class TriangleFeature : std::uint8_t { VertexA, VertexB, VertexC, EdgeAB, EdgeBC, EdgeCA, Face };
-
 struct ClosestOnTriangle {
   Eigen::Vector3d point = Eigen::Vector3d::Zero();
   TriangleFeature feature = TriangleFeature::Face;
 };
 
-/// Closest point of the triangle abc to p by its Voronoi regions (Ericson, Real-Time Collision Detection,
-/// 5.1.5). The region tests are exact sign tests, so the reported feature is the one whose pseudonormal gives
-/// the sign. The triangle must not be degenerate (every denominator is then a positive squared length).
+/// Closest point of the triangle abc to p (nearestRegion). The region tests are exact sign tests, so the reported
+/// feature is the one whose pseudonormal gives the sign. The triangle must not be degenerate (every denominator is
+/// then a positive squared length).
 inline ClosestOnTriangle closestOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                                            const Eigen::Vector3d& c) {
   using F = TriangleFeature;
-  const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
-  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
-  if (d1 <= 0 && d2 <= 0) return {a, F::VertexA};
-  const Eigen::Vector3d bp = p - b;
-  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
-  if (d3 >= 0 && d4 <= d3) return {b, F::VertexB};
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) return {a + (d1 / (d1 - d3)) * ab, F::EdgeAB};
-  const Eigen::Vector3d cp = p - c;
-  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
-  if (d6 >= 0 && d5 <= d6) return {c, F::VertexC};
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) return {a + (d2 / (d2 - d6)) * ac, F::EdgeCA};
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0) return {b + ((d4 - d3) / ((d4 - d3) + (d5 - d6))) * (c - b), F::EdgeBC};
-  const double denom = 1 / (va + vb + vc);
-  return {a + ab * (vb * denom) + ac * (vc * denom), F::Face};
+  const TriangleRegion<double> r = nearestRegion<double>(p, a, b, c);
+  switch (r.feature) {
+    case F::VertexA: return {a, F::VertexA};
+    case F::VertexB: return {b, F::VertexB};
+    case F::VertexC: return {c, F::VertexC};
+    case F::EdgeAB: return {a + r.s * (b - a), F::EdgeAB};
+    case F::EdgeCA: return {a + r.s * (c - a), F::EdgeCA};
+    case F::EdgeBC: return {b + r.s * (c - b), F::EdgeBC};
+    case F::Face: break;
+  }
+  return {a + (b - a) * r.s + (c - a) * r.t, F::Face};
 }
 
 /// A bounding volume hierarchy over a mesh's triangles for closest-point queries: median splits along the

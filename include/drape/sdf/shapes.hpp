@@ -29,6 +29,7 @@ template <Scalar S> struct Sdf<Plane, S> {
 template <Scalar S> struct Sdf<Sphere, S> {
   static constexpr bool kLinear = false;
   static constexpr bool kConvex = true;
+  static constexpr bool kPointCore = true;  ///< phi is |x - centre| - radius: a face is deepest nearest the centre
   Vec3<S> centre;
   S radius;
 
