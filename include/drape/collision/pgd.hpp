@@ -1,6 +1,7 @@
 #pragma once
 // The deepest point of a face in a solid: bounding-sphere culling, and a cutting-plane search over the face's
-// barycentric simplex (in place of the projected gradient descent of the SDF collision paper, Fig 1).
+// barycentric simplex (in place of the projected gradient descent of the SDF collision paper, Fig 1); on a ball,
+// the face's point nearest the centre in closed form.
 
 #include <drape/detail/triangle.hpp>
 #include <drape/kernel_constants.hpp>
@@ -225,9 +226,10 @@ template <class Field> constexpr double lipschitzOf() {
 }
 
 /// One face against one field: the bounding-sphere cull (when kCull) and, if the face may come within margin,
-/// its deepest point: cutting planes on a convex field, a field's own search where it has one (a grid's branch
-/// and bound, which spends up to kGridSearchBudget cell reads rather than maxIterations, unless exactSearch is
-/// false: Settings::exactGridSearch), the descent otherwise.
+/// its deepest point: on a ball the nearest point to its centre (which culls by itself), cutting planes on another
+/// convex field, a field's own search where it has one (a grid's branch and bound, which spends up to
+/// kGridSearchBudget cell reads rather than maxIterations, unless exactSearch is false: Settings::exactGridSearch),
+/// the descent otherwise.
 /// Returns false when culled. Shared by the solver's face pass and the penetration metric.
 template <bool kCull, Scalar S, class Field>
 bool queryFace(const Field& sdf, const Vec3<S>& x0, const Vec3<S>& x1, const Vec3<S>& x2, S margin,
