@@ -278,6 +278,10 @@ float boundOnTriangle(vec3 u0, vec3 u1, vec3 u2, out vec3 at, out float middleVa
 // a triangle too flat for the interior's weights.
 bool nearestOnTriangle(vec3 p, vec3 a, vec3 b, vec3 c, out vec3 w) {
   precise const vec3 ab = b - a, ac = c - a, ap = p - a;
+  w = vec3(1.0 / 3.0);
+  precise const vec3 normal =
+      vec3(ab.y * ac.z - ab.z * ac.y, ab.z * ac.x - ab.x * ac.z, ab.x * ac.y - ab.y * ac.x);  // Eigen's cross
+  if (!(dot3(normal, normal) > DRAPE_FLAT_SINE2 * dot3(ab, ab) * dot3(ac, ac))) return false;
   precise const float d1 = dot3(ab, ap), d2 = dot3(ac, ap);
   w = vec3(1.0, 0.0, 0.0);
   if (d1 <= 0.0 && d2 <= 0.0) return true;

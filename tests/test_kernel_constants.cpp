@@ -40,6 +40,7 @@ TEST_CASE("every shared constant reaches the shaders as the float the CPU kernel
                {"DRAPE_REACH", c::kReach},
                {"DRAPE_FACE_SEARCH_GAP", c::kFaceSearchGap},
                {"DRAPE_CUT_SLACK", c::kCutSlack},
+               {"DRAPE_FLAT_SINE2", c::kFlatSine2},
                {"DRAPE_MIN_DESCENT_STEP", c::kMinDescentStep},
                {"DRAPE_GRID_LIPSCHITZ", c::kGridLipschitz},
                {"DRAPE_PINCH_RATE", c::kPinchRate},

@@ -29,6 +29,9 @@ inline constexpr int kMaxCuts = 16;
 inline constexpr double kFaceSearchGap = 3e-4;
 /// A cut is kept while it is within this share of the tolerance of the model's minimum.
 inline constexpr double kCutSlack = 0.01;
+/// A face whose sine of the angle between its edges from the first corner is below the root of this is flat for
+/// the closed-form nearest point: rounding (a fused multiply-add) can put it in the wrong Voronoi region.
+inline constexpr double kFlatSine2 = 1e-6;
 /// Projected gradient descent stops when a step moves every barycentric coordinate less than this.
 inline constexpr double kMinDescentStep = 1e-3;
 /// The face search on grid fields splits a face at most this many times (sub-triangles 1/4096 of its size)...

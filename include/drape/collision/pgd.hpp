@@ -36,10 +36,14 @@ template <Scalar S> Vec3<S> projectToSimplex(const Vec3<S>& y) {
 }
 
 /// The point of the triangle (x0, x1, x2) nearest to p, as barycentric weights (detail::nearestRegion). False
-/// for a triangle too flat for the interior's weights, which the caller searches otherwise.
+/// for a flat triangle, which the caller searches otherwise: on a triangle with no area the Voronoi regions
+/// overlap, and rounding picked the wrong edge, a point 1 mm from the nearest, where the build fuses
+/// multiply-adds.
 template <Scalar S>
 bool nearestOnTriangle(const Vec3<S>& p, const Vec3<S>& x0, const Vec3<S>& x1, const Vec3<S>& x2, Vec3<S>& b) {
   using F = detail::TriangleFeature;
+  const Vec3<S> e1 = x1 - x0, e2 = x2 - x0;
+  if (!(e1.cross(e2).squaredNorm() > S(constants::kFlatSine2) * e1.squaredNorm() * e2.squaredNorm())) return false;
   const detail::TriangleRegion<S> r = detail::nearestRegion<S>(p, x0, x1, x2);
   switch (r.feature) {
     case F::VertexA: b = Vec3<S>(1, 0, 0); return true;
