@@ -4,7 +4,8 @@
 // two threads (substeps 5, iterations 1): the size and thread ratios come from one run of this binary.
 // meshDrop: a cloth dropped on meshed solids (grid fields), landing included.
 // ballDrop: a cloth dropped on a ball, landing included, with and without continuous contact.
-// ballScene: a cloth settled on a ball and the floor, the face method against vertex contacts.
+// ballScene: a cloth settled on a ball and the floor, the face method against vertex contacts, at two sizes on
+// one and two threads.
 // undoableStep: the slope (faces, 10 substeps) stepped with an observer that may throw, so each step keeps its
 // start to be undone, against a noexcept one.
 #include "slope.hpp"
@@ -143,11 +144,13 @@ void ballDrop(benchmark::State& state) {
 
 /// A 50 x 80 cloth (2 cm) draped over a ball of radius 0.3 m resting on the floor (friction 0.3 on both, 10
 /// substeps, area density 0.1 kg/m^2), timed after 2 s of settling, step after step: the first scene most users
-/// try, with the default face method (method 0) against vertex contacts only (method 1).
+/// try, with the default face method (method 0) against vertex contacts only (method 1). Side 256: a 256 x 256
+/// cloth of 5 mm spacing over the same ball, nearly the same area, for the cost per vertex as the cloth grows.
 void ballScene(benchmark::State& state) {
   drape::Settings settings;
   settings.collisionMethod = state.range(0) == 0 ? drape::CollisionMethod::Faces : drape::CollisionMethod::Vertices;
-  settings.threadCount = 1;
+  settings.threadCount = int(state.range(2));
+  const bool large = state.range(1) == 256;
   drape::Solid<drape::Sphere> ball;
   ball.shape.radius = 0.3;
   ball.pose.position = {0, 0, 0.3};
@@ -155,9 +158,9 @@ void ballScene(benchmark::State& state) {
   drape::Solid<drape::Plane> floor;
   floor.staticFriction = floor.dynamicFriction = 0.3;
   drape::SheetDesc sheet;
-  sheet.nx = 50;
-  sheet.ny = 80;
-  sheet.spacing = 0.02;
+  sheet.nx = large ? 256 : 50;
+  sheet.ny = large ? 256 : 80;
+  sheet.spacing = large ? 0.005 : 0.02;
   sheet.placement.position = {0.01, -0.02, 0.65};
   const auto asset = std::make_shared<const drape::ClothAsset<float>>(drape::ClothAsset<float>::sheet(sheet));
   drape::Solver<float> solver(asset, settings, 0.1);
@@ -220,8 +223,13 @@ BENCHMARK(ballDrop)
     ->Args({4, 1, 1})
     ->Unit(benchmark::kMillisecond);
 
-// method 0: faces (the default); 1: vertices. The two in one run give the ratio.
-BENCHMARK(ballScene)->ArgName("method")->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+// method 0: faces (the default); 1: vertices. The two in one run give the ratio. side 50 means the 50x80 cloth;
+// threads 1 or 2 (real time).
+BENCHMARK(ballScene)
+    ->ArgNames({"method", "side", "threads"})
+    ->ArgsProduct({{0, 1}, {50, 256}, {1, 2}})
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
 
 }  // namespace
 
