@@ -1,5 +1,6 @@
 // docs/design.md §6, phase 2, per vertex (the CPU twin: gatherContactForces with pinchSupport, unresolvedOverlap,
-// contactPoint, addWrench, addExchange and gatherPropagatedImpulse in include/drape/solver.hpp): what each contact
+// contactPoint, addWrench, addExchange, ownShare, addSplitExchange and gatherPropagatedImpulse in
+// include/drape/coupling/contact_forces.hpp): what each contact
 // vertex passes to the coupled bodies it touches, by the chosen estimator (sub-force, energy-based, impulse-based),
 // reversed onto the body at the contact's line; each entry is written to the vertex's own BodyPush slots (one per
 // contact slot at most), so nothing is summed here and no atomics are needed. body_sums.comp then sums them per
@@ -7,8 +8,8 @@
 //
 // A vertex whose slots all belong to one body passes that body its whole velocity change along the slot that
 // corrected it most (an exchange, which shareExchanges may scale); a vertex between two bodies, or a body and a
-// fixed solid, passes each body the normal part along its own slot (direct), unless it is pinched against a fixed
-// solid facing the body, which then holds the body through it (a pinch). With the impulse estimator and
+// fixed solid, passes each body the part of its change that slot made (ownShare), as an exchange of that part, unless it is pinched against a fixed solid facing the body, which then holds the body through it
+// (a pinch). With the impulse estimator and
 // propagation, a vertex not in contact passes what propagation gave it to the body of its first neighbour in
 // contact with one.
 layout(local_size_x = DRAPE_WORKGROUP) in;
@@ -78,6 +79,26 @@ float unresolvedOverlap(uint i, int k) {
   return overlap;
 }
 
+// What share of the normal part of vertex i's change dv along slot k's normal was slot k's (ownShare): a_k over
+// n_k . dv, with the a_j solving the slots' Gram system G a = (n_j . dv), padded to 3 x 3 (Cramer's rule); 1 where
+// the normals nearly span less than their count.
+float ownShare(uint i, int k, vec3 dv) {
+  const Contact c = contacts[i];
+  precise const float along = dot3(c.normal[k].xyz, dv);
+  if (!(along > 0.0)) return 0.0;
+  mat3 g = mat3(1.0);
+  vec3 b = vec3(0.0);
+  const int count = int(c.slots.x);
+  for (int j = 0; j < count; ++j) {
+    b[j] = dot3(c.normal[j].xyz, dv);
+    for (int l = 0; l < count; ++l) g[l][j] = dot3(c.normal[j].xyz, c.normal[l].xyz);
+  }
+  const float det = determinant(g);
+  if (!(det > DRAPE_SPLIT_GRAM_MIN)) return 1.0;
+  g[k] = b;
+  return max(determinant(g) / det, 0.0) / along;
+}
+
 // A vertex pinched between slot k's body and a fixed solid facing it: the solid holds the body through it
 // (pinchSupport). Returns false when the vertex is not pinched.
 bool pinchSupport(uint i, int k) {
@@ -128,6 +149,7 @@ void main() {
     entries[e].torque = vec4(0.0);
     entries[e].body = -1;
     entries[e].kind = kDirect;
+    entries[e].slot = -1;
   }
   const Contact c = contacts[i];
   const int slots = int(c.slots.x);
@@ -188,10 +210,17 @@ void main() {
         if (oneBody) impulse = impulse + (dv - dvn * n);  // the tangential (friction) change
         onBody = -(m / h) * impulse;
       }
-      if (oneBody)
+      if (oneBody) {
         addEntry(i, k, onBody, kExchange, dot3(onBody, onBody) / m);
-      else
-        addEntry(i, k, onBody, kDirect, 0.0);
+        continue;
+      }
+      // One of several solids' (addSplitExchange): the slot's own share, as a vertex of that share of the mass.
+      const float weight = ownShare(i, k, dv);
+      if (!(weight > 0.0)) continue;
+      precise const vec3 f = weight * onBody;
+      addEntry(i, k, f, kExchange, dot3(f, f) / (weight * m));
+      entries[entryCount - 1].torque.w = weight * dot3(dv, n);
+      entries[entryCount - 1].slot = k;
     }
   }
   for (int e = 0; e < DRAPE_CONTACT_SLOTS; ++e) pushes[DRAPE_CONTACT_SLOTS * i + uint(e)] = entries[e];

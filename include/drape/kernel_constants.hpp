@@ -63,6 +63,10 @@ inline constexpr double kSettleSlack = 1e-4;
 inline constexpr double kPinchRate = 0.2;
 /// A fixed solid pinches a vertex against a body when their normals' cosine is below this.
 inline constexpr double kPinchOpposingCos = -0.5;
+/// A vertex touching several solids has its velocity change split among their normals where the normals' Gram
+/// determinant (the squared volume they span) is above this; below it (surfaces facing each other), each slot
+/// takes its whole normal part.
+inline constexpr double kSplitGramMin = 1e-2;
 /// A slot's contacts share a line of action only where its summed push is at least this along its normal.
 inline constexpr double kLineMinAlong = 0.5;
 /// The energy estimate needs a displacement of squared length above this (m^2).

@@ -132,7 +132,7 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     if (coupled_ && vStart_.size() != state_.v.size()) {
       vStart_.resize(state_.v.size());
       vPre_.resize(state_.v.size());
-      exchanged_.reserve(state_.v.size());
+      exchanged_.reserve(state_.v.size() * std::size_t(constants::kContactSlots));
     }
   }
 
@@ -431,7 +431,7 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
   bool massesChanged_ = false;  ///< an inverse mass changed since the lane copies were gathered
   std::vector<Vec3<S>> vStart_, vPre_;                  ///< velocities at the substep's start, before contacts
   std::vector<coupling::BodySums> bodySums_;  ///< what each coupled body's exchange and pinches add up to
-  std::vector<std::pair<Index, std::int32_t>> exchanged_;  ///< the vertices in an exchange, and its body
+  std::vector<coupling::Exchanged> exchanged_;  ///< the vertices in an exchange, and its body
 };
 
 /// The solver with every built-in shape: the analytic ones, the rigid bodies' cylinders and convex hulls, and

@@ -13,6 +13,7 @@
 #endif
 
 #include <CLI/CLI.hpp>
+#include <Eigen/Eigenvalues>
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -191,6 +192,7 @@ nlohmann::ordered_json run(const Options& o, [[maybe_unused]] Painter* painter, 
   const double g = o.config.rigid.gravity.norm();
 
   double largestRadius = 0, bodiesMass = 0, speedBound = 0;
+  std::vector<double> spinBound(std::size_t(bodies), 0.0);  // each body's, from its own energy
   std::vector<TriangleMesh> meshes;
   for (int b = 0; b < bodies; ++b) {
     const auto& body = world.body(b);
@@ -202,6 +204,9 @@ nlohmann::ordered_json run(const Options& o, [[maybe_unused]] Painter* painter, 
     const double energy = 0.5 * m * body.state.linearVelocity.squaredNorm() +
                           0.5 * w.dot(body.massProperties().inertia * w) + m * g * body.state.pose.position.z();
     speedBound = std::max(speedBound, std::sqrt(2 * energy / m));
+    // The spin it would reach with all of that energy as rotation about its axis of least inertia.
+    const double least = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(body.massProperties().inertia).eigenvalues()[0];
+    spinBound[std::size_t(b)] = std::sqrt(2 * energy / least);
     if (!o.objDir.empty() || painter) meshes.push_back(bodyMesh(body.shape()));
   }
   double clothMass = 0;
@@ -225,7 +230,7 @@ nlohmann::ordered_json run(const Options& o, [[maybe_unused]] Painter* painter, 
 
   std::vector<double> stepMs;
   double maxPen = 0, maxPenPinned = 0, maxPenAtBodies = 0, maxFloorPen = 0, maxBodySpeed = 0, maxClothSpeed = 0,
-         maxBodySpin = 0;
+         maxBodySpin = 0, maxBodySpinBound = 0, maxSpinRatio = 0;
   int maxPenStep = 0, maxBodySpeedStep = 0, maxBodySpinStep = 0;
   int throughAtRelease = -1, offAtRelease = -1;
   bool finite = true;
@@ -275,7 +280,8 @@ nlohmann::ordered_json run(const Options& o, [[maybe_unused]] Painter* painter, 
       finite = finite && std::isfinite(v) && world.body(b).pose().position.allFinite();
       if (v > maxBodySpeed) maxBodySpeed = v, maxBodySpeedStep = s;
       const double w = world.body(b).angularVelocity().norm();
-      if (w > maxBodySpin) maxBodySpin = w, maxBodySpinStep = s;
+      if (w > maxBodySpin) maxBodySpin = w, maxBodySpinStep = s, maxBodySpinBound = spinBound[std::size_t(b)];
+      maxSpinRatio = std::max(maxSpinRatio, w / spinBound[std::size_t(b)]);
       stepBodySpeed = std::max(stepBodySpeed, v);
       bodyZMin = std::min(bodyZMin, z), bodyZMax = std::max(bodyZMax, z);
     }
@@ -353,6 +359,8 @@ nlohmann::ordered_json run(const Options& o, [[maybe_unused]] Painter* painter, 
   j["body_speed_energy_bound"] = speedBound;
   j["max_body_spin"] = maxBodySpin;  // rad/s
   j["max_body_spin_step"] = maxBodySpinStep;
+  j["max_body_spin_energy_bound"] = maxBodySpinBound;  // that body's, rad/s
+  j["max_body_spin_over_bound"] = maxSpinRatio;         // the largest of any body's spin over its own bound
   j["max_cloth_speed"] = maxClothSpeed;
   if (throughAtRelease >= 0) {
     j["bodies_through_cloth_at_release"] = throughAtRelease;
@@ -459,8 +467,9 @@ int main(int argc, char** argv) {
                  "  %.3f ms/step median (%.3f mean, %.2f s in all)\n"
                  "  deepest cloth vertex in a body %.3g m (step %d; %.3g m while pinned; %.3g m at the bodies' end "
                  "poses), below the floor %.3g m\n"
-                 "  fastest body %.3g m/s (step %d; own-energy bound %.3g), fastest spin %.3g rad/s (step %d),\n"
-                 "  fastest cloth vertex %.3g m/s\n"
+                 "  fastest body %.3g m/s (step %d; own-energy bound %.3g), fastest spin %.3g rad/s (step %d; that "
+                 "body's own-energy bound %.3g;\n  largest spin over its body's bound %.3g), fastest cloth vertex %.3g "
+                 "m/s\n"
                  "  final body centres z %.3g / %.3g / %.3g m (min/median/max), lowest body point %.3g m, strain max %.3g\n",
                  j["bodies"].get<int>(), c.seed, estimator.c_str(), scalar.c_str(), j["steps"].get<int>(), c.dt,
                  c.subSteps, c.release, j["ms_per_step"].get<double>(), j["ms_per_step_mean"].get<double>(),
@@ -469,7 +478,8 @@ int main(int argc, char** argv) {
                  j["max_penetration_at_bodies"].get<double>(), j["max_floor_penetration"].get<double>(),
                  j["max_body_speed"].get<double>(), j["max_body_speed_step"].get<int>(),
                  j["body_speed_energy_bound"].get<double>(), j["max_body_spin"].get<double>(),
-                 j["max_body_spin_step"].get<int>(), j["max_cloth_speed"].get<double>(),
+                 j["max_body_spin_step"].get<int>(), j["max_body_spin_energy_bound"].get<double>(),
+                 j["max_body_spin_over_bound"].get<double>(), j["max_cloth_speed"].get<double>(),
                  j["final_body_z_min"].get<double>(), j["final_body_z_median"].get<double>(),
                  j["final_body_z_max"].get<double>(), j["final_lowest_body_point"].get<double>(),
                  j["final_max_strain"].get<double>());

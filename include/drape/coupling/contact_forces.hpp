@@ -43,6 +43,16 @@ inline bool passesPropagatedImpulse(const Settings& s) {
          s.collisionMethod == CollisionMethod::Faces;
 }
 
+/// A vertex's velocity change in a body's exchange (shareExchanges): the whole change (slot -1, a vertex whose
+/// contacts are all with that body), or `part` of it, the share of slot `slot`'s body in a change that several
+/// bodies made.
+struct Exchanged {
+  Index vertex;
+  std::int32_t body;
+  std::int32_t slot = -1;
+  Eigen::Vector3d part = Eigen::Vector3d::Zero();
+};
+
 /// What one substep's estimates add up to: the direct pushes go into `force` and `torque` (which hold the
 /// repulsion region's already), exchanges and pinches into `sums`, and `exchanged` lists each exchanged vertex
 /// with its body.
@@ -50,7 +60,7 @@ struct Gathered {
   std::vector<Eigen::Vector3d>& force;
   std::vector<Eigen::Vector3d>& torque;
   std::vector<BodySums>& sums;
-  std::vector<std::pair<Index, std::int32_t>>& exchanged;
+  std::vector<Exchanged>& exchanged;
 };
 
 /// Where slot c's push acts on its body, from the body's centre (world axes): on the line along the slot's
@@ -105,7 +115,45 @@ void addExchange(const SubstepView<S>& s, const ContactSlot<S>& c, Index at, con
   BodySums& e = out.sums[std::size_t(c.body)];
   addWrench(s, c, at, f, e.exchangeForce, e.exchangeTorque);
   e.vertexSide += f.squaredNorm() / double(m);
-  out.exchanged.push_back({vertex, c.body});  // at most one per vertex: the capacity is the vertex count
+  out.exchanged.push_back({vertex, c.body});  // at most one per slot: the capacity is kContactSlots per vertex
+}
+
+/// What share of the normal part of vertex i's velocity change dv along slot k's normal was slot k's, for a vertex
+/// whose slots belong to several solids. The change the contacts made is a sum of pushes along the slots'
+/// normals, dv = sum_j a_j n_j (the split's nearest velocity approaching no surface is such a sum, with every
+/// a_j >= 0), so the a_j solve the normals' Gram system G a = (n_j . dv) and slot k's share is a_k / (n_k . dv):
+/// two bodies pressing a vertex side by side then share its change, where each took all of its normal part, and
+/// a sideways change goes to the tilted surface that made it. Where the normals nearly span less than their
+/// count (two surfaces facing each other), each slot takes its whole normal part (share 1).
+template <Scalar S> S ownShare(const ContactBuffer<S>& contacts, Index i, int k, const Vec3<S>& dv) {
+  const auto& slots = contacts.slots[i];
+  const int count = contacts.slotCount[i];
+  const S along = slots[k].normal.dot(dv);
+  if (!(along > S(0))) return S(0);
+  // The Gram system padded to 3 x 3 with the identity: Cramer's rule for two slots or three.
+  Mat3<S> g = Mat3<S>::Identity();
+  Vec3<S> b = Vec3<S>::Zero();
+  for (int j = 0; j < count; ++j) {
+    b[j] = slots[j].normal.dot(dv);
+    for (int l = 0; l < count; ++l) g(j, l) = slots[j].normal.dot(slots[l].normal);
+  }
+  const S det = g.determinant();
+  if (!(det > S(constants::kSplitGramMin))) return S(1);
+  g.col(k) = b;
+  return std::max(g.determinant() / det, S(0)) / along;
+}
+
+/// The push f of vertex i's slot k, one of several solids' the vertex touches, `weight` of the normal part of its
+/// change being the slot's (ownShare): it joins the body's exchange as a vertex of mass weight * m, and the vertex
+/// is listed with that part of its change.
+template <Scalar S>
+void addSplitExchange(const SubstepView<S>& s, const ContactSlot<S>& c, Index i, int k, const Eigen::Vector3d& f,
+                      S weight, S m, Gathered& out) {
+  BodySums& e = out.sums[std::size_t(c.body)];
+  addWrench(s, c, i, f, e.exchangeForce, e.exchangeTorque);
+  e.vertexSide += f.squaredNorm() / double(weight * m);
+  const Vec3<S> dv = s.state.v[i] - s.vPre[i];
+  out.exchanged.push_back({i, c.body, k, (weight * dv.dot(c.normal) * c.normal).template cast<double>()});
 }
 
 /// A vertex held between slot k's body and a fixed (static or kinematic) solid facing it cannot pass on the
@@ -173,7 +221,7 @@ template <Scalar S> void gatherPropagatedImpulse(const SubstepView<S>& s, Index 
 /// The force on the particle from vertex i's contacts, by the estimator, before it is passed to slot k's body.
 /// A vertex's velocity change is one vector however many slots made it, so when all its slots belong to one
 /// body (`oneBody`) that body gets the whole of it; a vertex between two bodies (or a body and a fixed solid)
-/// passes each body the normal part along its own slot.
+/// passes each body the normal part along its own slot, of which the caller keeps the slot's share (ownShare).
 template <Scalar S>
 Vec3<S> pushOnBody(const SubstepView<S>& s, Index i, int k, bool oneBody, const Vec3<S>& otherForce,
                    const Vec3<S>& energyForce) {
@@ -242,11 +290,13 @@ template <Scalar S> void gatherContactForces(const SubstepView<S>& s, Gathered& 
       if (c.body < 0) continue;
       if (count > 1 && !oneBody && pinchSupport(s, i, k, out)) continue;
       if (oneBody && k != top) continue;
-      const Eigen::Vector3d onBody = pushOnBody(s, i, k, oneBody, otherForce, energyForce).template cast<double>();
-      if (oneBody)
-        addExchange(s, c, i, onBody, i, m, out);
-      else
-        addWrench(s, c, i, onBody, out.force[std::size_t(c.body)], out.torque[std::size_t(c.body)]);
+      const Vec3<S> onBody = pushOnBody(s, i, k, oneBody, otherForce, energyForce);
+      if (oneBody) {
+        addExchange(s, c, i, onBody.template cast<double>(), i, m, out);
+        continue;
+      }
+      const S weight = ownShare(s.contacts, i, k, Vec3<S>(s.state.v[i] - s.vPre[i]));
+      if (weight > S(0)) addSplitExchange(s, c, i, k, (weight * onBody).template cast<double>(), weight, m, out);
     }
   }
 }

@@ -6,6 +6,7 @@
 #include <drape/cloth/asset.hpp>
 #include <drape/coupling/body.hpp>
 #include <drape/coupling/body_sums.hpp>
+#include <drape/coupling/contact_forces.hpp>
 
 #include <cstdint>
 #include <utility>
@@ -23,7 +24,8 @@ namespace drape::coupling {
 /// k = 1/m + (r x n)^T I^-1 (r x n): the impulse of two masses meeting, m_eff M_c / (m_eff + M_c) against the
 /// immovable body's M_c. A heavy body (k M_c -> 0) keeps all of it. The vertices keep the rest of their change
 /// undone, so they meet the body again the next substep: with the impulse estimate, momentum is still
-/// exchanged exactly, only later. Pinches, and vertices that also touch another surface, are not scaled.
+/// exchanged exactly, only later. A vertex touching several solids takes part in each body's exchange with the
+/// part of its change that was that body's (ownShare in coupling/contact_forces.hpp). Pinches are not scaled.
 inline double exchangeShare(const CoupledBody& body, const Eigen::Vector3d& force, const Eigen::Vector3d& torque,
                             double vertexSide) {
   // Both sides of Q / (Q + J^T M^-1 J) without their common factor h^2.
@@ -35,7 +37,7 @@ inline double exchangeShare(const CoupledBody& body, const Eigen::Vector3d& forc
 /// changes (from vPre) to their side's share. `exchanged` lists each such vertex with its body.
 template <Scalar S>
 void shareExchanges(const std::vector<CoupledBody*>& bodies, std::vector<BodySums>& sums,
-                    const std::vector<std::pair<Index, std::int32_t>>& exchanged, std::vector<Eigen::Vector3d>& force,
+                    const std::vector<Exchanged>& exchanged, std::vector<Eigen::Vector3d>& force,
                     std::vector<Eigen::Vector3d>& torque, Vec3<S>* v, const Vec3<S>* vPre) {
   bool partial = false;
   for (std::size_t b = 0; b < sums.size(); ++b) {
@@ -46,9 +48,12 @@ void shareExchanges(const std::vector<CoupledBody*>& bodies, std::vector<BodySum
     partial = partial || e.share < 1;
   }
   if (!partial) return;
-  for (const auto& [i, b] : exchanged) {
-    const S share = S(sums[std::size_t(b)].share);
-    v[i] = vPre[i] + share * (v[i] - vPre[i]);
+  for (const Exchanged& e : exchanged) {
+    const S share = S(sums[std::size_t(e.body)].share);
+    if (e.slot < 0)
+      v[e.vertex] = vPre[e.vertex] + share * (v[e.vertex] - vPre[e.vertex]);
+    else  // the part of the change that slot's body made, scaled alone
+      v[e.vertex] -= (S(1) - share) * e.part.template cast<S>();
   }
 }
 

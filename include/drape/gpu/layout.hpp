@@ -127,11 +127,13 @@ struct Lines {
 static_assert(sizeof(Lines) == 96 && offsetof(Lines, moment) == 48);
 
 /// What a vertex passes to one body this substep: the force (N, w: |f|^2 / m for an exchange) and the torque
-/// about the body's centre (N m); the body (-1: none) and the kind (0 direct, 1 exchange, 2 pinch).
+/// about the body's centre (N m); the body (-1: none) and the kind (0 direct, 1 exchange, 2 pinch). An exchange of
+/// a vertex touching several solids names its contact slot (-1: the vertex's whole change), and torque[3] holds
+/// the slot's part of the vertex's velocity change along the slot's normal (m/s; coupling::Exchanged).
 struct BodyPush {
   float force[4];
   float torque[4];
-  std::int32_t body, kind, pad[2];
+  std::int32_t body, kind, slot, pad;
 };
 static_assert(sizeof(BodyPush) == 48 && offsetof(BodyPush, torque) == 16 && offsetof(BodyPush, body) == 32);
 
@@ -271,6 +273,7 @@ inline std::string preamble(const std::string& defines = {}) {
   s += define("DRAPE_FACE_SWEEP_STEPS", constants::kFaceSweepSteps);
   s += define("DRAPE_PINCH_RATE", constants::kPinchRate);
   s += define("DRAPE_PINCH_OPPOSING_COS", constants::kPinchOpposingCos);
+  s += define("DRAPE_SPLIT_GRAM_MIN", constants::kSplitGramMin);
   s += define("DRAPE_LINE_MIN_ALONG", constants::kLineMinAlong);
   s += define("DRAPE_ENERGY_MIN_DISPLACEMENT2", constants::kEnergyMinDisplacement2);
   s += define("DRAPE_B_V_START", kVStart);
@@ -296,7 +299,7 @@ inline std::string preamble(const std::string& defines = {}) {
   s += "struct Ring { vec4 normal; float amount; uint reached; uint pad0; uint pad1; };\n";
   s += "struct PinSlot { vec3 target; uint vertex; };\n";
   s += "struct Lines { vec4 push[DRAPE_CONTACT_SLOTS]; vec4 moment[DRAPE_CONTACT_SLOTS]; };\n";
-  s += "struct BodyPush { vec4 force; vec4 torque; int body; int kind; int pad0; int pad1; };\n";
+  s += "struct BodyPush { vec4 force; vec4 torque; int body; int kind; int slot; int pad; };\n";
   s += "struct Body { vec4 centre; vec4 linear; vec4 angular; vec4 inverseInertia[3]; };\n";
   s += "struct BodySum { dvec4 directForce; dvec4 directTorque; dvec4 exchangeForce; dvec4 exchangeTorque; "
        "dvec4 pinchForce; dvec4 pinchTorque; };\n";

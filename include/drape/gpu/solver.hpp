@@ -137,6 +137,8 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
   /// by colour, for drawing the cloth where it is (Renderer::drawTriangles) without reading it back.
   const Buffer<layout::Vertex>& positionBuffer() const { return positions_; }
   const Buffer<std::array<std::uint32_t, 4>>& faceBuffer() const { return faces_; }
+  /// The last substep's contact records (layout::Contact per vertex), for tools and tests that read them back.
+  const Buffer<layout::Contact>& contactBuffer() const { return contacts_; }
   /// The local origin the positions are relative to (world, m): the state's, without reading the state back.
   const Eigen::Vector3d& origin() const { return state_.origin; }
 
