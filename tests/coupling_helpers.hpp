@@ -6,6 +6,7 @@
 #include <drape/coupling/rigid_world.hpp>
 #include <drape/rigid/world.hpp>
 
+#include <array>
 #include <limits>
 #include <memory>
 #include <stdexcept>
@@ -48,6 +49,35 @@ template <class Cloth> void dropIntoHammock(Cloth& cloth, RigidWorld& world, int
   coupling.staticFriction = coupling.dynamicFriction = 0.3;
   addCoupledBody(cloth, world, b, coupling);
   for (int s = 0; s < steps; ++s) stepCoupled(cloth, world, 0.01);
+}
+
+/// The kinetic energy of the cloth's free vertices and the world's dynamic bodies (J).
+template <class Cloth> double kineticEnergy(const Cloth& cloth, const RigidWorld& world) {
+  double e = world.kineticEnergy();
+  const auto& state = cloth.state();
+  for (Index i = 0; i < cloth.vertexCount(); ++i)
+    if (state.invMass[std::size_t(i)] > 0)
+      e += 0.5 * state.v[std::size_t(i)].template cast<double>().squaredNorm() / double(state.invMass[std::size_t(i)]);
+  return e;
+}
+
+/// Two 0.064 g boxes side by side, 2 mm apart, their tops tilted 20 degrees into a V, rising at 2 m/s into
+/// `cloth` (a cloth at z = 0 in empty space), coupled to it: the vertices over the gap touch both. Returns the
+/// cloth's index of each box's body (a slot's ContactSlot::body), which is the world's here.
+template <class Cloth> std::array<int, 2> pressTwoBoxes(Cloth& cloth, RigidWorld& world) {
+  std::array<int, 2> boxes{};
+  for (std::size_t k = 0; k < 2; ++k) {
+    const double x = k == 0 ? -0.021 : 0.021;
+    BodyDesc box;
+    box.shape = Box{Eigen::Vector3d(0.02, 0.04, 0.01)};
+    box.pose.position = {x + 0.004, -0.003, -0.05};
+    box.pose.rotation = Eigen::AngleAxisd(x > 0 ? 0.35 : -0.35, Eigen::Vector3d::UnitY());
+    box.linearVelocity = {0, 0, 2};
+    box.density = 1;
+    boxes[k] = world.add(box);
+    addCoupledBody(cloth, world, boxes[k]);
+  }
+  return boxes;
 }
 
 /// Gravity and no ground: the cloth alone holds what falls on it.

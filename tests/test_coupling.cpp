@@ -128,23 +128,8 @@ TEMPLATE_TEST_CASE("two light boxes pressing a cloth side by side share the vert
   settings.gravity.setZero();
   drape::Solver<S> cloth(squareCloth<S>(21, 0.02, 0.0), settings);
   drape::RigidWorld world(emptySpace());
-  std::vector<int> boxes;
-  for (const double x : {-0.021, 0.021}) {
-    drape::BodyDesc box;
-    box.shape = drape::Box{Eigen::Vector3d(0.02, 0.04, 0.01)};
-    box.pose.position = {x + 0.004, -0.003, -0.05};
-    box.pose.rotation = Eigen::AngleAxisd(x > 0 ? 0.35 : -0.35, Eigen::Vector3d::UnitY());
-    box.linearVelocity = {0, 0, 2};
-    box.density = 1;
-    boxes.push_back(world.add(box));
-    drape::addCoupledBody(cloth, world, boxes.back());
-  }
-  auto energy = [&] {
-    double e = world.kineticEnergy();
-    for (drape::Index i = 0; i < cloth.vertexCount(); ++i)
-      if (cloth.state().invMass[i] > 0) e += 0.5 * cloth.velocity(i).squaredNorm() / double(cloth.state().invMass[i]);
-    return e;
-  };
+  const std::array<int, 2> boxes = drape::test::pressTwoBoxes(cloth, world);
+  auto energy = [&] { return drape::test::kineticEnergy(cloth, world); };
   const double e0 = energy();
   const Eigen::Vector3d p0 = world.linearMomentum() + clothMomentum(cloth);
   double highest = e0;

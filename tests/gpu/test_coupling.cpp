@@ -138,25 +138,8 @@ TEST_CASE("coupling on the GPU: two light boxes pressing a cloth side by side sh
   settings.gravity.setZero();
   drape::gpu::Solver cloth(drape::test::gpuContext(), squareCloth(21, 0.02, 0.0), settings);
   drape::RigidWorld world(emptySpace());
-  std::vector<int> boxes;
-  for (const double x : {-0.021, 0.021}) {
-    drape::BodyDesc box;
-    box.shape = drape::Box{Eigen::Vector3d(0.02, 0.04, 0.01)};
-    box.pose.position = {x + 0.004, -0.003, -0.05};
-    box.pose.rotation = Eigen::AngleAxisd(x > 0 ? 0.35 : -0.35, Eigen::Vector3d::UnitY());
-    box.linearVelocity = {0, 0, 2};
-    box.density = 1;
-    boxes.push_back(world.add(box));
-    drape::addCoupledBody(cloth, world, boxes.back());
-  }
-  auto energy = [&] {
-    double e = world.kineticEnergy();
-    const auto& state = cloth.state();
-    for (Index i = 0; i < cloth.vertexCount(); ++i)
-      if (state.invMass[std::size_t(i)] > 0)
-        e += 0.5 * double(state.v[std::size_t(i)].squaredNorm()) / double(state.invMass[std::size_t(i)]);
-    return e;
-  };
+  const std::array<int, 2> boxes = drape::test::pressTwoBoxes(cloth, world);
+  auto energy = [&] { return drape::test::kineticEnergy(cloth, world); };
   const double e0 = energy();
   const Eigen::Vector3d p0 = world.linearMomentum() + clothMomentum(cloth);
   double highest = e0;
