@@ -1,17 +1,16 @@
 // docs/design.md §6, phase 2, per vertex (the CPU twin: gatherContactForces with pinchSupport, unresolvedOverlap,
 // contactPoint, addWrench, addExchange, ownShare, addSplitExchange and gatherPropagatedImpulse in
-// include/drape/coupling/contact_forces.hpp): what each contact
-// vertex passes to the coupled bodies it touches, by the chosen estimator (sub-force, energy-based, impulse-based),
-// reversed onto the body at the contact's line; each entry is written to the vertex's own BodyPush slots (one per
-// contact slot at most), so nothing is summed here and no atomics are needed. body_sums.comp then sums them per
-// body in a fixed order.
+// include/drape/coupling/contact_forces.hpp): what each contact vertex passes to the coupled bodies it touches, by
+// the chosen estimator (sub-force, energy-based, impulse-based), reversed onto the body at the contact's line;
+// each entry is written to the vertex's own BodyPush slots (one per contact slot at most), so nothing is summed
+// here and no atomics are needed. body_sums.comp then sums them per body in a fixed order.
 //
 // A vertex whose slots all belong to one body passes that body its whole velocity change along the slot that
 // corrected it most (an exchange, which shareExchanges may scale); a vertex between two bodies, or a body and a
-// fixed solid, passes each body the part of its change that slot made (ownShare), as an exchange of that part, unless it is pinched against a fixed solid facing the body, which then holds the body through it
-// (a pinch). With the impulse estimator and
-// propagation, a vertex not in contact passes what propagation gave it to the body of its first neighbour in
-// contact with one.
+// fixed solid, passes each body the part of its change that body's slot made (ownShare), as an exchange of that
+// part, unless it is pinched against a fixed solid facing the body, which then holds the body through it (a
+// pinch). With the impulse estimator and propagation, a vertex not in contact passes what propagation gave it to
+// the body of its first neighbour in contact with one.
 layout(local_size_x = DRAPE_WORKGROUP) in;
 layout(std430, binding = DRAPE_B_POSITIONS) readonly buffer Positions { vec4 x[]; };
 layout(std430, binding = DRAPE_B_VELOCITIES) readonly buffer Velocities { vec4 v[]; };

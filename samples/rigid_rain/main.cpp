@@ -281,7 +281,7 @@ nlohmann::ordered_json run(const Options& o, [[maybe_unused]] Painter* painter, 
       if (v > maxBodySpeed) maxBodySpeed = v, maxBodySpeedStep = s;
       const double w = world.body(b).angularVelocity().norm();
       if (w > maxBodySpin) maxBodySpin = w, maxBodySpinStep = s, maxBodySpinBound = spinBound[std::size_t(b)];
-      maxSpinRatio = std::max(maxSpinRatio, w / spinBound[std::size_t(b)]);
+      if (spinBound[std::size_t(b)] > 0) maxSpinRatio = std::max(maxSpinRatio, w / spinBound[std::size_t(b)]);
       stepBodySpeed = std::max(stepBodySpeed, v);
       bodyZMin = std::min(bodyZMin, z), bodyZMax = std::max(bodyZMax, z);
     }
