@@ -2,8 +2,9 @@
 // its centre vertex pinned on the vertical axis through the sphere's centre. No force can turn the cloth about
 // that axis, so its mass-weighted angular momentum about it, L_z = sum m (x v_y - y v_x), should stay at zero.
 // Printed for every collision method, float and double, the sphere at rest and spinning at 2 rad/s, at each
-// substep count given: L_z after the run, and L_z / I_z (the cloth's turn, rad/s). The same cloth hanging from
-// its pin with no solid at all shows the constraint solve's share.
+// substep count given, with Settings::keepAngularMomentum off and on: L_z after the run, and L_z / I_z (the
+// cloth's turn, rad/s). The same cloth hanging from its pin with no solid at all shows the constraint solve's
+// share.
 // Run: build/bench/spin_drift [seconds, default 10] [substep counts..., default 2 10]
 #include <drape/drape.hpp>
 
@@ -18,11 +19,12 @@ namespace {
 using namespace drape;
 
 template <class S>
-scenes::AxialSpin run(CollisionMethod method, int substeps, double spin, bool sphere, double seconds) {
+scenes::AxialSpin run(CollisionMethod method, int substeps, double spin, bool sphere, double seconds, bool keep) {
   using scenes::SphereDrape;
   Settings settings;
   settings.collisionMethod = method;
   settings.subStepCount = substeps;
+  settings.keepAngularMomentum = keep;
   Solver<S> solver(SphereDrape::asset<S>(), settings);
   if (sphere) solver.addSolid(SphereDrape::sphere(spin));
   solver.pin(SphereDrape::kCentre);
@@ -47,8 +49,8 @@ int main(int argc, char** argv) {
       return 2;
     }
   std::printf("After %g s. L_z in kg m^2/s; the turn L_z / I_z in rad/s.\n\n", seconds);
-  std::printf("| scene | substeps | method | float L_z | float turn | double L_z | double turn |\n");
-  std::printf("|---|---:|---|---:|---:|---:|---:|\n");
+  std::printf("| scene | substeps | method | moment kept | float L_z | float turn | double L_z | double turn |\n");
+  std::printf("|---|---:|---|---|---:|---:|---:|---:|\n");
   struct Scene {
     const char* name;
     bool sphere;
@@ -57,13 +59,15 @@ int main(int argc, char** argv) {
   for (const Scene scene : {Scene{"sphere at rest", true, 0.0}, Scene{"sphere spinning at 2 rad/s", true, 2.0},
                             Scene{"no solid", false, 0.0}})
     for (int n : substeps)
-      for (CollisionMethod m : {CollisionMethod::Faces, CollisionMethod::Vertices, CollisionMethod::InSolve}) {
-        if (!scene.sphere && m != CollisionMethod::Faces) continue;  // no contact: the methods are one
-        const scenes::AxialSpin f = run<float>(m, n, scene.spin, scene.sphere, seconds);
-        const scenes::AxialSpin d = run<double>(m, n, scene.spin, scene.sphere, seconds);
-        std::printf("| %s | %d | %s | %+.2e | %+.3f | %+.2e | %+.3f |\n", scene.name, n,
-                    scene.sphere ? toString(m) : "any", f.momentum, f.rate(), d.momentum, d.rate());
-        std::fflush(stdout);
-      }
+      for (CollisionMethod m : {CollisionMethod::Faces, CollisionMethod::Vertices, CollisionMethod::InSolve})
+        for (const bool keep : {false, true}) {
+          if (!scene.sphere && m != CollisionMethod::Faces) continue;  // no contact: the methods are one
+          const scenes::AxialSpin f = run<float>(m, n, scene.spin, scene.sphere, seconds, keep);
+          const scenes::AxialSpin d = run<double>(m, n, scene.spin, scene.sphere, seconds, keep);
+          std::printf("| %s | %d | %s | %s | %+.2e | %+.4f | %+.2e | %+.4f |\n", scene.name, n,
+                      scene.sphere ? toString(m) : "any", keep ? "yes" : "no", f.momentum, f.rate(), d.momentum,
+                      d.rate());
+          std::fflush(stdout);
+        }
   return 0;
 }

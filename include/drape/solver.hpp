@@ -5,6 +5,7 @@
 
 #include <drape/cloth/asset.hpp>
 #include <drape/cloth/integrate.hpp>
+#include <drape/cloth/spin.hpp>
 #include <drape/cloth/state.hpp>
 #include <drape/collision/broadphase.hpp>
 #include <drape/collision/passes.hpp>
@@ -53,6 +54,7 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     blocks_[1] = DistanceBlocks<S>(asset_->shear);
     blocks_[2] = DistanceBlocks<S>(asset_->bending);
     gatherLaneMasses();
+    spinChunks_.resize(std::size_t((n + kSpinChunk - 1) / kSpinChunk));
     lambdaStretch_.resize(blocks_[0].lambdaCount(asset_->stretch));
     lambdaShear_.resize(blocks_[1].lambdaCount(asset_->shear));
     lambdaBending_.resize(blocks_[2].lambdaCount(asset_->bending));
@@ -122,6 +124,7 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     repulsive_ = has.repulsion;
     reconcile_ = has.reconcile;
     coupled_ = has.coupled;
+    keepSpin_ = settings_.keepAngularMomentum;
     pinLocal_.resize(pins_.size());
     lambdaPins_.resize(pins_.size());
     for (std::size_t k = 0; k < pins_.size(); ++k)
@@ -164,6 +167,7 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     if (coupled_) copyVelocities(vStart_);  // the estimators' velocity at the start of the substep
     predict(h);
     solve(h);
+    if (keepSpin_) restoreSpin(h);
     update(h);
     // 4. collide
     if (coupled_) copyVelocities(vPre_);  // before any contact acts
@@ -199,7 +203,7 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     const Index n = vertexCount();
     withFlags([&](auto keepStart) {
       teamFor(n, [&](Index b, Index e) { predictPositions<keepStart()>(b, e, x, v, w, gh, h, x0, xp, xw); });
-    }, hasFriction_ || coupled_ || sweep_);
+    }, hasFriction_ || coupled_ || sweep_ || keepSpin_);
   }
 
   /// 2. iterationCount passes over the constraints, set by set, then the pins; the in-solve method's contacts
@@ -230,15 +234,29 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
         {
           if (it == 0) std::fill(lambdaPins_.begin(), lambdaPins_.end(), S(0));
           solvePins(pinLocal_.data(), Index(pinLocal_.size()), pinAlpha, lambdaPins_.data(), xw,
-                    this->state_.invMass.data());
+                    this->state_.invMass.data(), keepSpin_ ? &spinExternal_ : nullptr, xPrev_.data());
         }
       }
       if (inSolve) {  // contacts inside the solve, on the unpacked positions
         unpack(x, xw);
         collideInSolve(h, S(settings_.thickness));
-        teamFor(vertexCount(), [&](Index b, Index e) {
-          for (Index i = b; i < e; ++i) xw[i].template head<3>() = x[i];
-        });
+        if (keepSpin_) {  // the contacts' pushes are the solids', not the solve's
+          const S* w = this->state_.invMass.data();
+          forEachSpinChunk([&](Index b, Index e) {
+            SpinSums pushed;
+            for (Index i = b; i < e; ++i) {
+              if (w[i] > S(0)) pushed.addExternal(xPrev_[i], Vec3<S>(x[i] - xw[i].template head<3>()), w[i]);
+              xw[i].template head<3>() = x[i];
+            }
+            return pushed;
+          });
+          DRAPE_OMP(single)
+          for (const SpinSums& c : spinChunks_) spinExternal_.add(c);
+        } else {
+          teamFor(vertexCount(), [&](Index b, Index e) {
+            for (Index i = b; i < e; ++i) xw[i].template head<3>() = x[i];
+          });
+        }
       }
     }
   }
@@ -256,6 +274,38 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     teamAdd(travel_, h * std::sqrt(fastest));
     DRAPE_OMP(barrier)
     return travel_;
+  }
+
+  /// Chunks of kSpinChunk vertices shared by the team, each chunk's sums into spinChunks_: added in chunk order,
+  /// they do not depend on the thread count.
+  template <class F> void forEachSpinChunk(F&& sums) {
+    const Index n = vertexCount();
+    teamFor(Index(spinChunks_.size()), [&](Index b, Index e) {
+      for (Index c = b; c < e; ++c) spinChunks_[std::size_t(c)] = sums(c * kSpinChunk, std::min(n, (c + 1) * kSpinChunk));
+    });
+  }
+
+  /// 2b. With Settings::keepAngularMomentum: the moment the solve's pushes added, less the external pushes inside
+  ///     it, taken out again by a rotation of the vertices it moved (cloth/spin.hpp).
+  void restoreSpin(const S h) {
+    const Vec4<S>* xw = packed_.data();
+    const Vec3<S>* xp = xPredicted_.data();
+    const Vec3<S>* xs = xPrev_.data();
+    const S* w = state_.invMass.data();
+    forEachSpinChunk([&](Index b, Index e) { return sumSolvePushes(b, e, xw, xp, xs, w); });
+    DRAPE_OMP(single)
+    {
+      SpinSums total;
+      for (const SpinSums& c : spinChunks_) total.add(c);
+      total.moment -= spinExternal_.moment;
+      total.push -= spinExternal_.push;
+      spinExternal_ = {};
+      const FreeAxes axes = freeAxes(fixed_, xw, kFixedPointTolerance);
+      spinOn_ = restoringSpin(total, axes, double(h), spinOmega_, spinCentre_);
+    }
+    if (!spinOn_) return;
+    Vec3<S>* v = state_.v.data();
+    teamFor(vertexCount(), [&](Index b, Index e) { applySpin(b, e, xw, xp, w, v, spinOmega_, spinCentre_); });
   }
 
   /// 3. update velocity (updateVelocities). Where a vertex may touch several surfaces, the positions the
@@ -288,6 +338,9 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
   /// The constraint blocks' copies of the inverse masses, after any change of a mass. Only the float SIMD kernels
   /// read them: double runs the scalar kernel on the masses themselves.
   void gatherLaneMasses() {
+    fixed_.clear();
+    for (Index i = 0; i < vertexCount(); ++i)
+      if (!(state_.invMass[std::size_t(i)] > S(0))) fixed_.push_back(i);
     if constexpr (!std::is_same_v<S, float>) return;
     for (DistanceBlocks<S>& b : blocks_) b.gatherMasses(state_.invMass.data());
   }
@@ -368,7 +421,7 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
   void projectAll(S thickness, bool faces, S h = S(0)) {
     PassInputs<S> in{state_.x.data(),       state_.invMass.data(),        xPredicted_.data(),
                      asset_->triangles,      thickness,                    settings_.pgdIterations,
-                     settings_.culling,      settings_.exactGridSearch};
+                     settings_.culling,      settings_.exactGridSearch,    keepSpin_};
     if (sweep_ && h > S(0)) {
       const S gate = S(constants::kSweepGate) * thickness;
       in.sweep = {xPrev_.data(), h, gate * gate};
@@ -432,6 +485,14 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
   std::vector<Vec3<S>> vStart_, vPre_;                  ///< velocities at the substep's start, before contacts
   std::vector<coupling::BodySums> bodySums_;  ///< what each coupled body's exchange and pinches add up to
   std::vector<coupling::Exchanged> exchanged_;  ///< the vertices in an exchange, and its body
+  // Settings::keepAngularMomentum (restoreSpin)
+  static constexpr Index kSpinChunk = 1024;
+  bool keepSpin_ = false;
+  bool spinOn_ = false;                 ///< a rotation restores the moment this substep
+  std::vector<Index> fixed_;            ///< the kinematic vertices (inverse mass 0)
+  std::vector<SpinSums> spinChunks_;    ///< each chunk's sums
+  SpinSums spinExternal_;               ///< the external pushes inside this substep's solve
+  Eigen::Vector3d spinOmega_ = Eigen::Vector3d::Zero(), spinCentre_ = Eigen::Vector3d::Zero();
 };
 
 /// The solver with every built-in shape: the analytic ones, the rigid bodies' cylinders and convex hulls, and

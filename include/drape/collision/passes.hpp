@@ -27,6 +27,8 @@ template <Scalar S> struct PassInputs {
   int pgdIterations;
   bool culling;
   bool exactGridSearch;
+  /// Face contacts on smooth fields record each corner's own normal (Settings::keepAngularMomentum).
+  bool ownNormals = false;
   /// Continuous contact (docs/design.md §18): the start positions and the substep (sweep.start null: off), and
   /// the farthest any vertex travelled this substep.
   SweepInputs<S> sweep = {};
@@ -159,7 +161,8 @@ template <Scalar S> class ContactPasses {
           bins_.faces(x, solid.boxLow, solid.boxHigh, thickness + reach, nearFaces_);
           bins_.noteDrift(projectFaceContacts<kCull, true, kSweep>(
               solid, thickness, in.pgdIterations, in.triangles, ItemList{nearFaces_.data()},
-              Index(nearFaces_.size()), x, w, contacts_, stats_, bins_.binned(), in.exactGridSearch, in.sweep));
+              Index(nearFaces_.size()), x, w, contacts_, stats_, bins_.binned(), in.exactGridSearch, in.sweep,
+              in.ownNormals));
         }
       }
     } else {
@@ -171,7 +174,7 @@ template <Scalar S> class ContactPasses {
         {
           const S moved = projectFaceContacts<kCull, false, kSweep>(
               solid, thickness, in.pgdIterations, in.triangles, AllItems{}, Index(in.triangles.size()), x, w,
-              contacts_, stats_, binned, in.exactGridSearch, in.sweep);
+              contacts_, stats_, binned, in.exactGridSearch, in.sweep, in.ownNormals);
           if (useBins_) bins_.noteDrift(moved);
         }
       }

@@ -289,8 +289,10 @@ VertexPassShare<S> projectVertexContacts(Index begin, Index end, const CompiledS
 ///
 /// With kSweep (continuous contact), a face whose corners travelled further than the gate relative to the solid
 /// is first searched along its path (sweepFace); from its first contact on, no corner goes further against the
-/// contact normal than it was then. The discrete query then runs on where that left it.
-template <bool kCull, bool kBody, bool kBoxed, bool kSweep, class Shape, Scalar S, class Ids>
+/// contact normal than it was then. The discrete query then runs on where that left it. With kOwnNormals (a
+/// smooth field, Settings::keepAngularMomentum), each corner's record takes the field's normal at the corner.
+template <bool kCull, bool kBody, bool kBoxed, bool kSweep, bool kOwnNormals = false, class Shape, Scalar S,
+          class Ids>
 S projectFaceContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, int pgdIterations,
                         const std::vector<std::array<Index, 3>>& triangles, Ids ids, Index count, Vec3<S>* x,
                         const S* invMass, ContactBuffer<S>& contacts, CollisionStats& stats, const Vec3<S>* binned,
@@ -369,8 +371,17 @@ S projectFaceContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, int p
       if (wb[k] <= S(0)) continue;
       const S dn = wb[k] / denom * depth;
       x[t[k]] += dn * q.normal;
-      contacts.template record<kBody>(t[k], x[t[k]], q.normal, dn, solid.motion, placed,
-                                      solid.motion.contactVelocityAt(x[t[k]], q.normal, placed));
+      Vec3<S> n = q.normal, anchor = placed;
+      if constexpr (kOwnNormals) {
+        // On a smooth field each corner answers along its own normal, whose line meets the ball's centre or
+        // the capsule's axis as the push's does: the face's normal at its corners turns the cloth about them
+        // (docs/design.md §4). A corner beyond a thin capsule, facing the other way, keeps the face's.
+        Vec3<S> g;
+        const S phi = solid.sdf(x[t[k]], g);
+        if (g.dot(q.normal) >= S(constants::kMergeCos)) n = g, anchor = x[t[k]] - phi * g;
+      }
+      contacts.template record<kBody>(t[k], x[t[k]], n, dn, solid.motion, anchor,
+                                      solid.motion.contactVelocityAt(x[t[k]], n, anchor));
       moved = std::max(moved, (x[t[k]] - binned[t[k]]).squaredNorm());
     }
   }
@@ -381,12 +392,20 @@ template <bool kCull, bool kBoxed = false, bool kSweep = false, class Shape, Sca
 S projectFaceContacts(const CompiledSolid<Shape, S>& solid, S thickness, int pgdIterations,
                       const std::vector<std::array<Index, 3>>& triangles, Ids ids, Index count, Vec3<S>* x,
                       const S* invMass, ContactBuffer<S>& contacts, CollisionStats& stats, const Vec3<S>* binned,
-                      bool exactSearch = true, const SweepInputs<S>& sweep = {}) {
-  return withFlags([&](auto body) {
-    return projectFaceContactsAs<kCull, body(), kBoxed, kSweep>(solid, thickness, pgdIterations, triangles, ids,
-                                                                count, x, invMass, contacts, stats, binned,
-                                                                exactSearch, sweep);
-  }, solid.motion.body >= 0);
+                      bool exactSearch = true, const SweepInputs<S>& sweep = {}, bool ownNormals = false) {
+  constexpr bool kSmooth = requires { Sdf<Shape, S>::kSmooth; };
+  const bool body = solid.motion.body >= 0;
+  if constexpr (kSmooth) {
+    if (ownNormals && !body)
+      return projectFaceContactsAs<kCull, false, kBoxed, kSweep, true>(solid, thickness, pgdIterations, triangles,
+                                                                       ids, count, x, invMass, contacts, stats,
+                                                                       binned, exactSearch, sweep);
+  }
+  return withFlags([&](auto isBody) {
+    return projectFaceContactsAs<kCull, isBody(), kBoxed, kSweep>(solid, thickness, pgdIterations, triangles, ids,
+                                                                  count, x, invMass, contacts, stats, binned,
+                                                                  exactSearch, sweep);
+  }, body);
 }
 
 

@@ -12,6 +12,7 @@
 // differently from the AVX2 kernel, which never fuses. Each kernel is still deterministic.)
 
 #include <drape/cloth/asset.hpp>
+#include <drape/cloth/spin.hpp>
 
 #if defined(__SSE2__) || defined(_M_X64) || (defined(_M_IX86_FP) && _M_IX86_FP >= 2)
 #include <emmintrin.h>
@@ -366,9 +367,12 @@ template <Scalar S> struct PinTarget {
 };
 
 /// Pins on packed positions: a vertex of inverse mass 0 is placed on its target (kinematic); any other is
-/// pulled toward it by a zero-length XPBD distance constraint. Serial: two pins may hold the same vertex.
+/// pulled toward it by a zero-length XPBD distance constraint. Serial: two pins may hold the same vertex. With
+/// `external`, each pull is added to it as an external push on a vertex that started the substep at `start`
+/// (Settings::keepAngularMomentum).
 template <Scalar S>
-void solvePins(const PinTarget<S>* pins, Index count, S alphaTilde, S* lambda, Vec4<S>* xw, const S* invMass) {
+void solvePins(const PinTarget<S>* pins, Index count, S alphaTilde, S* lambda, Vec4<S>* xw, const S* invMass,
+               SpinSums* external = nullptr, const Vec3<S>* start = nullptr) {
   for (Index k = 0; k < count; ++k) {
     const Index i = pins[k].vertex;
     auto x = xw[i].template head<3>();
@@ -382,7 +386,9 @@ void solvePins(const PinTarget<S>* pins, Index count, S alphaTilde, S* lambda, V
     if (len <= S(0)) continue;
     const S dLambda = (-len - alphaTilde * lambda[k]) / (w + alphaTilde);
     lambda[k] += dLambda;
-    x += (w * dLambda / len) * d;
+    const Vec3<S> pull = (w * dLambda / len) * d;
+    x += pull;
+    if (external != nullptr) external->addExternal(start[i], pull, w);
   }
 }
 

@@ -183,6 +183,8 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
     drape::detail::require(s.culling, "the GPU solver always culls faces: Settings::culling = false is not supported");
     drape::detail::require(s.exactGridSearch, "the GPU solver runs the exact face search on grid fields: "
                                               "Settings::exactGridSearch = false is not supported");
+    drape::detail::require(!s.keepAngularMomentum, "the GPU solver does not yet restore the solve's angular "
+                                                   "momentum: Settings::keepAngularMomentum = true is not supported");
     drape::detail::require(s.broadPhase,
                            "the GPU solver always culls by bounding box: Settings::broadPhase = false is not supported");
     drape::detail::require(s.threadCount == 1, [&] {

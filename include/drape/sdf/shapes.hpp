@@ -30,6 +30,7 @@ template <Scalar S> struct Sdf<Sphere, S> {
   static constexpr bool kLinear = false;
   static constexpr bool kConvex = true;
   static constexpr bool kPointCore = true;  ///< phi is |x - centre| - radius: a face is deepest nearest the centre
+  static constexpr bool kSmooth = true;     ///< no edges: the gradient turns smoothly along the surface
   Vec3<S> centre;
   S radius;
 
@@ -72,6 +73,7 @@ template <Scalar S> struct Sdf<Box, S> {
 template <Scalar S> struct Sdf<Capsule, S> {
   static constexpr bool kLinear = false;
   static constexpr bool kConvex = true;
+  static constexpr bool kSmooth = true;  ///< no edges: the gradient turns smoothly along the surface
   Vec3<S> centre;
   Vec3<S> axis;  ///< unit, world
   S halfHeight;
