@@ -8,6 +8,7 @@
 // one and two threads.
 // undoableStep: the slope (faces, 10 substeps) stepped with an observer that may throw, so each step keeps its
 // start to be undone, against a noexcept one.
+// keptSpin: the slope and the ball scene without and with Settings::keepAngularMomentum.
 #include "slope.hpp"
 
 #include <benchmark/benchmark.h>
@@ -146,11 +147,7 @@ void ballDrop(benchmark::State& state) {
 /// substeps, area density 0.1 kg/m^2), timed after 2 s of settling, step after step: the first scene most users
 /// try, with the default face method (method 0) against vertex contacts only (method 1). Side 256: a 256 x 256
 /// cloth of 5 mm spacing over the same ball, nearly the same area, for the cost per vertex as the cloth grows.
-void ballScene(benchmark::State& state) {
-  drape::Settings settings;
-  settings.collisionMethod = state.range(0) == 0 ? drape::CollisionMethod::Faces : drape::CollisionMethod::Vertices;
-  settings.threadCount = int(state.range(2));
-  const bool large = state.range(1) == 256;
+drape::Solver<float> settledOnBall(const drape::Settings& settings, bool large) {
   drape::Solid<drape::Sphere> ball;
   ball.shape.radius = 0.3;
   ball.pose.position = {0, 0, 0.3};
@@ -167,6 +164,14 @@ void ballScene(benchmark::State& state) {
   solver.addSolid(ball);
   solver.addSolid(floor);
   for (int f = 0; f < 120; ++f) solver.step(1.0 / 60);
+  return solver;
+}
+
+void ballScene(benchmark::State& state) {
+  drape::Settings settings;
+  settings.collisionMethod = state.range(0) == 0 ? drape::CollisionMethod::Faces : drape::CollisionMethod::Vertices;
+  settings.threadCount = int(state.range(2));
+  drape::Solver<float> solver = settledOnBall(settings, state.range(1) == 256);
   long long faceContacts = 0, vertexContacts = 0, steps = 0;
   for (auto _ : state) {
     solver.step(1.0 / 60, [&](const auto& s) {
@@ -182,6 +187,35 @@ void ballScene(benchmark::State& state) {
   const double substeps = double(steps) * settings.subStepCount;
   state.counters["face_contacts"] = double(faceContacts) / substeps;
   state.counters["vertex_contacts"] = double(vertexContacts) / substeps;
+}
+
+/// What Settings::keepAngularMomentum costs (docs/design.md §4), on one thread: scene 0 is the slope (faces, 10
+/// substeps, settled), scene 1 the 50 x 80 cloth settled on the ball; keep 0 without it, 1 with it.
+void keptSpin(benchmark::State& state) {
+  const bool keep = state.range(1) != 0;
+  drape::Settings settings;
+  settings.keepAngularMomentum = keep;
+  settings.threadCount = 1;
+  auto run = [&](auto& solver, double dt, int substeps) {
+    for (auto _ : state) {
+      solver.step(dt);
+      benchmark::ClobberMemory();
+    }
+    state.counters["vertex_substep"] =
+        benchmark::Counter(double(solver.vertexCount()) * substeps,
+                           benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+  };
+  if (state.range(0) == 0) {
+    drape::scenes::SlopeConfig c;
+    c.subSteps = 10;
+    c.base = settings;
+    auto solver = drape::scenes::makeSlope<float>(c);
+    for (int f = 0; f < 90; ++f) solver.step(c.dt);
+    run(solver, c.dt, c.subSteps);
+  } else {
+    drape::Solver<float> solver = settledOnBall(settings, false);
+    run(solver, 1.0 / 60, settings.subStepCount);
+  }
 }
 
 void substepsAndIterations(benchmark::internal::Benchmark* b) {
@@ -230,6 +264,9 @@ BENCHMARK(ballScene)
     ->ArgsProduct({{0, 1}, {50, 256}, {1, 2}})
     ->UseRealTime()
     ->Unit(benchmark::kMillisecond);
+
+// scene 0: the slope, 1: the ball; keep 1: Settings::keepAngularMomentum on.
+BENCHMARK(keptSpin)->ArgNames({"scene", "keep"})->ArgsProduct({{0, 1}, {0, 1}})->Unit(benchmark::kMillisecond);
 
 }  // namespace
 

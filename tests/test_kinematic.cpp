@@ -139,8 +139,8 @@ TEMPLATE_TEST_CASE("with the angular momentum kept, a cloth pinned on a friction
   // Nothing can turn the cloth about the axis: the sphere pushes along lines through its centre, the pin is on
   // the axis, gravity is along it. XPBD's solve adds a moment from nothing, and a face contact's corners answered
   // along the face's normal add another (docs/design.md §4). Measured after 5 s at 10 substeps with the moment
-  // kept: at most 1.8e-3 rad/s, but 5.4e-3 for the faces method in float on the spinning sphere (a turn from the
-  // landing that fades: 7.6e-3 at 3 s, 2.0e-3 at 10 s); without, 0.18-0.34 rad/s.
+  // kept: at most 9e-4 rad/s for the vertices and in-solve methods, 5.4e-3 (double, at rest) and 4.4e-3 (float,
+  // spinning) for the faces method; without, 0.18-0.34 rad/s.
   using S = TestType;
   using M = drape::CollisionMethod;
   const double seconds = 5, bound = 1e-2;
@@ -160,8 +160,8 @@ TEMPLATE_TEST_CASE("with the angular momentum kept, a cloth pinned on a friction
 TEMPLATE_TEST_CASE("with the angular momentum kept, a cloth hanging from one pin keeps its angular momentum",
                    "[kinematic][spin]", float, double) {
   // No solid: the pin can push the cloth but has no moment about itself, so the cloth's angular momentum about
-  // the vertical through the pin stays at zero. Without the restoring rotation XPBD's solve gives it 1.1e-3
-  // kg m^2/s in 5 s (float and double alike); with it, rounding (measured 4e-10 in float, 5e-19 in double).
+  // the vertical through the pin stays at zero. Without the restoring rotation XPBD's solve gives it 4.4e-4
+  // (float) and 1.1e-3 kg m^2/s (double) in 5 s; with it, rounding (measured 2e-10 in float, 2e-19 in double).
   using S = TestType;
   using drape::scenes::SphereDrape;
   for (const bool keep : {true, false}) {

@@ -286,7 +286,7 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
   }
 
   /// 2b. With Settings::keepAngularMomentum: the moment the solve's pushes added, less the external pushes inside
-  ///     it, taken out again by a rotation of the vertices it moved (cloth/spin.hpp).
+  ///     it, taken out again by a rotation of the free vertices (cloth/spin.hpp).
   void restoreSpin(const S h) {
     const Vec4<S>* xw = packed_.data();
     const Vec3<S>* xp = xPredicted_.data();
@@ -305,7 +305,7 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     }
     if (!spinOn_) return;
     Vec3<S>* v = state_.v.data();
-    teamFor(vertexCount(), [&](Index b, Index e) { applySpin(b, e, xw, xp, w, v, spinOmega_, spinCentre_); });
+    teamFor(vertexCount(), [&](Index b, Index e) { applySpin(b, e, xw, w, v, spinOmega_, spinCentre_); });
   }
 
   /// 3. update velocity (updateVelocities). Where a vertex may touch several surfaces, the positions the

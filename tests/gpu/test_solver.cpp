@@ -284,6 +284,10 @@ TEST_CASE("the GPU solver rejects bad settings and solids before changing anythi
   drape::Settings descent = parts.settings;
   descent.exactGridSearch = false;
   CHECK_THROWS_WITH(gpu.setSettings(descent), Catch::Contains("exactGridSearch"));
+  drape::Settings keep = parts.settings;
+  keep.keepAngularMomentum = true;
+  CHECK_THROWS_WITH(gpu.setSettings(keep), Catch::Contains("keepAngularMomentum"));
+  CHECK_FALSE(gpu.settings().keepAngularMomentum);
   CHECK_THROWS_WITH(drape::gpu::Solver(drape::test::gpuContext(), parts.asset, noCulling),
                     Catch::Contains("culling"));
   CHECK(gpu.settings().culling);

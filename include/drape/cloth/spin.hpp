@@ -14,8 +14,8 @@
 // point, or along the line they lie on. So about that point, or along that line, the measured moment is all
 // the solve's. Where the kinematic vertices span a plane, they can take any moment, and nothing is restored.
 //
-// The rotation goes to each vertex in proportion to how far the solve moved it, about those weights' centre
-// of mass: it keeps the linear momentum, and leaves alone the vertices the solve did not touch.
+// The rotation turns the free vertices as one body about their centre of mass, which keeps the linear
+// momentum.
 
 #include <drape/math.hpp>
 
@@ -31,9 +31,9 @@ inline constexpr double kFixedPointTolerance = 1e-6;
 struct SpinSums {
   Eigen::Vector3d moment = Eigen::Vector3d::Zero();  ///< sum m x_start × dx (kg m^2)
   Eigen::Vector3d push = Eigen::Vector3d::Zero();    ///< sum m dx (kg m)
-  double weight = 0;                                 ///< sum beta m, beta = |dx| (kg m)
-  Eigen::Vector3d first = Eigen::Vector3d::Zero();   ///< sum beta m x
-  Eigen::Matrix3d second = Eigen::Matrix3d::Zero();  ///< sum beta m x x^T
+  double weight = 0;                                 ///< sum m (kg)
+  Eigen::Vector3d first = Eigen::Vector3d::Zero();   ///< sum m x
+  Eigen::Matrix3d second = Eigen::Matrix3d::Zero();  ///< sum m x x^T
 
   void add(const SpinSums& o) {
     moment += o.moment;
@@ -50,23 +50,34 @@ struct SpinSums {
   }
 };
 
-/// The solve's pushes dx = x_solved - x_predicted of the free vertices [begin, end), with their weights.
+/// The solve's pushes dx = x_solved - x_predicted of the free vertices [begin, end), and their masses' moments.
+/// Written out by component in double: Eigen's mixed-type expressions cost several times as much here.
 template <Scalar S>
 SpinSums sumSolvePushes(Index begin, Index end, const Vec4<S>* solved, const Vec3<S>* predicted,
                         const Vec3<S>* start, const S* invMass) {
-  SpinSums s;
+  double mx = 0, my = 0, mz = 0, px = 0, py = 0, pz = 0, w = 0, fx = 0, fy = 0, fz = 0;
+  double sxx = 0, sxy = 0, sxz = 0, syy = 0, syz = 0, szz = 0;
   for (Index i = begin; i < end; ++i) {
     if (!(invMass[i] > S(0))) continue;
-    const Eigen::Vector3d x = solved[i].template head<3>().template cast<double>();
-    const Eigen::Vector3d dx = x - predicted[i].template cast<double>();
     const double m = 1.0 / double(invMass[i]);
-    const double bm = dx.norm() * m;
-    s.moment += start[i].template cast<double>().cross(m * dx);
-    s.push += m * dx;
-    s.weight += bm;
-    s.first += bm * x;
-    s.second += bm * x * x.transpose();
+    const S* x = solved[i].data();
+    const double x0 = double(x[0]), x1 = double(x[1]), x2 = double(x[2]);
+    const double d0 = m * (x0 - double(predicted[i][0])), d1 = m * (x1 - double(predicted[i][1])),
+                 d2 = m * (x2 - double(predicted[i][2]));
+    const double s0 = double(start[i][0]), s1 = double(start[i][1]), s2 = double(start[i][2]);
+    mx += s1 * d2 - s2 * d1, my += s2 * d0 - s0 * d2, mz += s0 * d1 - s1 * d0;
+    px += d0, py += d1, pz += d2;
+    w += m;
+    const double m0 = m * x0, m1 = m * x1, m2 = m * x2;
+    fx += m0, fy += m1, fz += m2;
+    sxx += m0 * x0, sxy += m0 * x1, sxz += m0 * x2, syy += m1 * x1, syz += m1 * x2, szz += m2 * x2;
   }
+  SpinSums s;
+  s.moment = {mx, my, mz};
+  s.push = {px, py, pz};
+  s.weight = w;
+  s.first = {fx, fy, fz};
+  s.second << sxx, sxy, sxz, sxy, syy, syz, sxz, syz, szz;
   return s;
 }
 
@@ -104,9 +115,9 @@ FreeAxes freeAxes(const std::vector<Index>& fixed, const Vec4<S>* x, double tole
   return axes;
 }
 
-/// The restoring rotation: the rate omega (per metre of a vertex's push) and the centre it turns about, such that
-/// the velocity changes beta omega × (x - centre) take the solve's moment about the free axes out of the
-/// cloth's angular momentum over the substep h. False where there is nothing to restore.
+/// The restoring rotation: the angular velocity omega and the centre it turns about, such that the velocity
+/// changes omega × (x - centre) take the solve's moment about the free axes out of the cloth's angular momentum
+/// over the substep h. False where there is nothing to restore.
 inline bool restoringSpin(const SpinSums& s, const FreeAxes& axes, double h, Eigen::Vector3d& omega,
                           Eigen::Vector3d& centre) {
   if (axes.kind == FreeAxes::Kind::None || !(s.weight > 0)) return false;
@@ -127,15 +138,17 @@ inline bool restoringSpin(const SpinSums& s, const FreeAxes& axes, double h, Eig
   return omega.allFinite();
 }
 
-/// v += beta omega × (x - centre) for the free vertices [begin, end), beta = |x_solved - x_predicted|.
+/// v += omega × (x - centre) for the free vertices [begin, end): omega × x less omega × centre, in S.
 template <Scalar S>
-void applySpin(Index begin, Index end, const Vec4<S>* solved, const Vec3<S>* predicted, const S* invMass, Vec3<S>* v,
+void applySpin(Index begin, Index end, const Vec4<S>* solved, const S* invMass, Vec3<S>* v,
                const Eigen::Vector3d& omega, const Eigen::Vector3d& centre) {
+  const Vec3<S> o = omega.cast<S>(), base = omega.cross(centre).cast<S>();
   for (Index i = begin; i < end; ++i) {
     if (!(invMass[i] > S(0))) continue;
-    const Eigen::Vector3d x = solved[i].template head<3>().template cast<double>();
-    const double beta = (x - predicted[i].template cast<double>()).norm();
-    v[i] += (beta * omega.cross(x - centre)).template cast<S>();
+    const S* x = solved[i].data();
+    v[i][0] += o[1] * x[2] - o[2] * x[1] - base[0];
+    v[i][1] += o[2] * x[0] - o[0] * x[2] - base[1];
+    v[i][2] += o[0] * x[1] - o[1] * x[0] - base[2];
   }
 }
 
