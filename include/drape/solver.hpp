@@ -146,6 +146,7 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
       massesChanged_ = false;
     }
     passes_.resetStats();
+    spinExternal_ = {};  // a substep a body's exception cut short leaves nothing behind
     const int threads = settings_.threadCount == 0 ? hardwareThreads() : settings_.threadCount;
     // One team for the whole substep: its loops share the work (teamFor), so the team is made once. One
     // thread opens no team: outside one the directives cost nothing, while a team of one still pays libgomp's
