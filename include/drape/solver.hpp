@@ -234,8 +234,10 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
         DRAPE_OMP(single)
         {
           if (it == 0) std::fill(lambdaPins_.begin(), lambdaPins_.end(), S(0));
-          solvePins(pinLocal_.data(), Index(pinLocal_.size()), pinAlpha, lambdaPins_.data(), xw,
-                    this->state_.invMass.data(), keepSpin_ ? &spinExternal_ : nullptr, xPrev_.data());
+          withFlags([&](auto record) {
+            solvePins<record()>(pinLocal_.data(), Index(pinLocal_.size()), pinAlpha, lambdaPins_.data(), xw,
+                                this->state_.invMass.data(), &spinExternal_, xPrev_.data());
+          }, keepSpin_);
         }
       }
       if (inSolve) {  // contacts inside the solve, on the unpacked positions

@@ -368,9 +368,9 @@ template <Scalar S> struct PinTarget {
 
 /// Pins on packed positions: a vertex of inverse mass 0 is placed on its target (kinematic); any other is
 /// pulled toward it by a zero-length XPBD distance constraint. Serial: two pins may hold the same vertex. With
-/// `external`, each pull is added to it as an external push on a vertex that started the substep at `start`
-/// (Settings::keepAngularMomentum).
-template <Scalar S>
+/// kRecord, each pull is added to `external` as an external push on a vertex that started the substep at
+/// `start` (Settings::keepAngularMomentum).
+template <bool kRecord = false, Scalar S>
 void solvePins(const PinTarget<S>* pins, Index count, S alphaTilde, S* lambda, Vec4<S>* xw, const S* invMass,
                SpinSums* external = nullptr, const Vec3<S>* start = nullptr) {
   for (Index k = 0; k < count; ++k) {
@@ -388,7 +388,7 @@ void solvePins(const PinTarget<S>* pins, Index count, S alphaTilde, S* lambda, V
     lambda[k] += dLambda;
     const Vec3<S> pull = (w * dLambda / len) * d;
     x += pull;
-    if (external != nullptr) external->addExternal(start[i], pull, w);
+    if constexpr (kRecord) external->addExternal(start[i], pull, w);
   }
 }
 
