@@ -146,7 +146,7 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
       massesChanged_ = false;
     }
     passes_.resetStats();
-    spinExternal_ = {};  // a substep a body's exception cut short leaves nothing behind
+    spinExternal_ = {};  // this substep's own; one an exception cut short leaves nothing behind
     const int threads = settings_.threadCount == 0 ? hardwareThreads() : settings_.threadCount;
     // One team for the whole substep: its loops share the work (teamFor), so the team is made once. One
     // thread opens no team: outside one the directives cost nothing, while a team of one still pays libgomp's
@@ -302,7 +302,6 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
       for (const SpinSums& c : spinChunks_) total.add(c);
       total.moment -= spinExternal_.moment;
       total.push -= spinExternal_.push;
-      spinExternal_ = {};
       const FreeAxes axes = freeAxes(fixed_, xw, kFixedPointTolerance);
       spinOn_ = restoringSpin(total, axes, double(h), spinOmega_, spinCentre_);
     }
@@ -338,8 +337,8 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     }
   }
 
-  /// The constraint blocks' copies of the inverse masses, after any change of a mass. Only the float SIMD kernels
-  /// read them: double runs the scalar kernel on the masses themselves.
+  /// After any change of a mass: the kinematic vertices' list (restoreSpin), and the constraint blocks' copies of
+  /// the inverse masses, which only the float SIMD kernels read (double runs the scalar kernel on the masses).
   void gatherLaneMasses() {
     fixed_.clear();
     for (Index i = 0; i < vertexCount(); ++i)
