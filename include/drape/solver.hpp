@@ -125,6 +125,7 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     reconcile_ = has.reconcile;
     coupled_ = has.coupled;
     keepSpin_ = settings_.keepAngularMomentum;
+    propagation_.keepAnchors(keepSpin_, vertexCount());
     pinLocal_.resize(pins_.size());
     lambdaPins_.resize(pins_.size());
     for (std::size_t k = 0; k < pins_.size(); ++k)
@@ -302,8 +303,9 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
       for (const SpinSums& c : spinChunks_) total.add(c);
       total.moment -= spinExternal_.moment;
       total.push -= spinExternal_.push;
-      const FreeAxes axes = freeAxes(fixed_, xw, kFixedPointTolerance);
-      spinOn_ = restoringSpin(total, axes, double(h), spinOmega_, spinCentre_);
+      spinAxes_ = freeAxes(fixed_, xw, kFixedPointTolerance);
+      spinOn_ = restoringSpin(total, spinAxes_, double(h), spinOmega_, spinCentre_);
+      spinMasses_ = total;
     }
     if (!spinOn_) return;
     Vec3<S>* v = state_.v.data();
@@ -459,10 +461,45 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     DRAPE_OMP(single)
     propagation_.beginPass();
     const S weight = S(settings_.propagationWeight);
+    if (keepSpin_) {
+      propagateKeepingSpin(h, weight);
+      return;
+    }
     for (int ring = 1; ring <= settings_.propagationRings; ++ring)
       teamFor(vertexCount(), [&](Index b, Index e) {
         propagateRing(b, e, ring, passes_.contacts(), propagation_, asset_->vertexNeighbours, v, w, weight);
       });
+  }
+
+  /// Propagation with Settings::keepAngularMomentum: each ring's shares are summed chunk by chunk into the moment
+  /// they add beside their sources' lines (propagateRing<true>), which a rotation of the free vertices takes out,
+  /// as restoreSpin does the solve's, about the same free axes and with the same masses.
+  void propagateKeepingSpin(S h, S weight) {
+    Vec3<S>* x = state_.x.data();
+    Vec3<S>* v = state_.v.data();
+    const S* w = state_.invMass.data();
+    DRAPE_OMP(single)
+    spinCouple_.setZero();
+    for (int ring = 1; ring <= settings_.propagationRings; ++ring) {
+      forEachSpinChunk([&](Index b, Index e) {
+        SpinSums c;
+        c.moment = propagateRing<true>(b, e, ring, passes_.contacts(), propagation_, asset_->vertexNeighbours, v,
+                                       w, weight, x);
+        return c;
+      });
+      DRAPE_OMP(single)
+      for (const SpinSums& c : spinChunks_) spinCouple_ += c.moment;
+    }
+    DRAPE_OMP(single)
+    {
+      // A couple (no push): the same about every point. Over the substep, as the solve's moment is.
+      SpinSums sums = spinMasses_;
+      sums.moment = spinCouple_ * double(h);
+      sums.push.setZero();
+      spinOn_ = spinCouple_.squaredNorm() > 0 && restoringSpin(sums, spinAxes_, double(h), spinOmega_, spinCentre_);
+    }
+    if (!spinOn_) return;
+    teamFor(vertexCount(), [&](Index b, Index e) { applySpin(b, e, x, w, v, spinOmega_, spinCentre_); });
   }
 
 
@@ -494,6 +531,9 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
   std::vector<Index> fixed_;            ///< the kinematic vertices (inverse mass 0)
   std::vector<SpinSums> spinChunks_;    ///< each chunk's sums
   SpinSums spinExternal_;               ///< the external pushes inside this substep's solve
+  SpinSums spinMasses_;                 ///< the free vertices' masses and moments, as restoreSpin summed them
+  FreeAxes spinAxes_;                   ///< the axes restoreSpin restored about
+  Eigen::Vector3d spinCouple_ = Eigen::Vector3d::Zero();  ///< the propagation's couple (propagateKeepingSpin)
   Eigen::Vector3d spinOmega_ = Eigen::Vector3d::Zero(), spinCentre_ = Eigen::Vector3d::Zero();
 };
 

@@ -138,9 +138,10 @@ inline bool restoringSpin(const SpinSums& s, const FreeAxes& axes, double h, Eig
   return omega.allFinite();
 }
 
-/// v += omega × (x - centre) for the free vertices [begin, end): omega × x less omega × centre, in S.
-template <Scalar S>
-void applySpin(Index begin, Index end, const Vec4<S>* solved, const S* invMass, Vec3<S>* v,
+/// v += omega × (x - centre) for the free vertices [begin, end): omega × x less omega × centre, in S. The
+/// positions are packed (Vec4, the solve's) or not (Vec3).
+template <Scalar S, class Position>
+void applySpin(Index begin, Index end, const Position* solved, const S* invMass, Vec3<S>* v,
                const Eigen::Vector3d& omega, const Eigen::Vector3d& centre) {
   const Vec3<S> o = omega.cast<S>(), base = omega.cross(centre).cast<S>();
   for (Index i = begin; i < end; ++i) {

@@ -575,6 +575,8 @@ template <Scalar S> struct PropagationBuffer {
   std::vector<std::uint64_t> reach[2];
   std::vector<Vec3<S>> normal;
   std::vector<S> normalSpeed, amount;
+  /// Where each reached vertex's share came from (propagateRing<true>): sized by keepAnchors only.
+  std::vector<Vec3<S>> anchor;
 
   void resize(Index n) {
     pass = 0;
@@ -583,6 +585,11 @@ template <Scalar S> struct PropagationBuffer {
     normal.resize(n);
     normalSpeed.resize(n);
     amount.resize(n);
+    if (!anchor.empty()) anchor.resize(n);
+  }
+  void keepAnchors(bool keep, Index n) {
+    if (keep) anchor.resize(n);
+    else std::vector<Vec3<S>>().swap(anchor);
   }
   /// Starts a propagation: the rings of earlier ones no longer count as reached.
   void beginPass() { ++pass; }
@@ -597,9 +604,18 @@ template <Scalar S> struct PropagationBuffer {
 /// Each vertex gathers from its neighbours in the ring before (the GPU kernel gathers the same way), so the
 /// sums have one order whatever the thread count. This is ring `ring` (1, 2, ...) for vertices [begin, end),
 /// after buf.beginPass(); ring r + 1 starts when every vertex is done with ring r.
-template <Scalar S>
-void propagateRing(Index begin, Index end, int ring, const ContactBuffer<S>& contacts, PropagationBuffer<S>& buf,
-                   const Adjacency& neighbours, Vec3<S>* v, const S* invMass, S weight) {
+///
+/// With kCouple (Settings::keepAngularMomentum, docs/design.md §4) it also returns the moment the shares add
+/// beside what their sources' contacts would: a share stands in for a push its sources took from the solid, so
+/// its line of action belongs through them (ring 1: the mean of the source vertices' positions `x`; later rings:
+/// the mean of their sources' anchors), not through the vertex it moves. On a ball the sources' mean point and
+/// mean normal give a line through the centre; at the vertex the share turns the cloth about it. Returned is
+/// sum m (x_j - anchor_j) × dv_j, in double, for the caller to take out.
+template <bool kCouple = false, Scalar S>
+Eigen::Vector3d propagateRing(Index begin, Index end, int ring, const ContactBuffer<S>& contacts,
+                              PropagationBuffer<S>& buf, const Adjacency& neighbours, Vec3<S>* v, const S* invMass,
+                              S weight, const Vec3<S>* x = nullptr) {
+  [[maybe_unused]] double cx = 0, cy = 0, cz = 0;
   const std::uint32_t mark = contacts.current;
   const std::uint64_t from = buf.key(ring - 1), to = buf.key(ring);
   const std::uint64_t* reachFrom = buf.reach[(ring - 1) & 1].data();
@@ -608,6 +624,7 @@ void propagateRing(Index begin, Index end, int ring, const ContactBuffer<S>& con
     if (contacts.stamp[j] == mark || invMass[j] == S(0)) continue;
     if (ring > 1 && buf.reachedThisPass(j)) continue;  // settled in an earlier ring
     Vec3<S> normalSum = Vec3<S>::Zero();
+    [[maybe_unused]] Vec3<S> anchorSum = Vec3<S>::Zero();
     S speedSum = 0, amountSum = 0;
     int count = 0;
     for (const Index* it = neighbours.begin(j); it != neighbours.end(j); ++it) {
@@ -618,11 +635,13 @@ void propagateRing(Index begin, Index end, int ring, const ContactBuffer<S>& con
         normalSum += ni;
         speedSum += ni.dot(contacts.solidVelocity(i));
         amountSum += contacts.normalDv[i];
+        if constexpr (kCouple) anchorSum += x[i];
       } else {
         if (reachFrom[i] != from || buf.amount[i] <= S(0)) continue;
         normalSum += buf.normal[i];
         speedSum += buf.normalSpeed[i];
         amountSum += buf.amount[i];
+        if constexpr (kCouple) anchorSum += buf.anchor[i];
       }
       ++count;
     }
@@ -639,12 +658,24 @@ void propagateRing(Index begin, Index end, int ring, const ContactBuffer<S>& con
     const S vcn = speedSum / len;
     const S approach = -(nj.dot(v[j]) - vcn);
     const S give = weight * amountSum * inv;
-    if (approach > S(0)) v[j] += std::min(approach, give) * nj;
+    if (approach > S(0)) {
+      const S dv = std::min(approach, give);
+      v[j] += dv * nj;
+      if constexpr (kCouple) {
+        const Vec3<S> r = x[j] - anchorSum * inv;
+        const double p = double(dv) / double(invMass[j]);
+        cx += p * (double(r[1]) * double(nj[2]) - double(r[2]) * double(nj[1]));
+        cy += p * (double(r[2]) * double(nj[0]) - double(r[0]) * double(nj[2]));
+        cz += p * (double(r[0]) * double(nj[1]) - double(r[1]) * double(nj[0]));
+      }
+    }
     // The next ring sees this ring's share, not what it happened to need.
     buf.amount[j] = give;
     buf.normal[j] = nj;
     buf.normalSpeed[j] = vcn;
+    if constexpr (kCouple) buf.anchor[j] = anchorSum * inv;
   }
+  return {cx, cy, cz};
 }
 
 }  // namespace drape
