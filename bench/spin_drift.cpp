@@ -64,7 +64,7 @@ int main(int argc, char** argv) {
           if (!scene.sphere && m != CollisionMethod::Faces) continue;  // no contact: the methods are one
           const scenes::AxialSpin f = run<float>(m, n, scene.spin, scene.sphere, seconds, keep);
           const scenes::AxialSpin d = run<double>(m, n, scene.spin, scene.sphere, seconds, keep);
-          std::printf("| %s | %d | %s | %s | %+.2e | %+.4f | %+.2e | %+.4f |\n", scene.name, n,
+          std::printf("| %s | %d | %s | %s | %+.2e | %+.1e | %+.2e | %+.1e |\n", scene.name, n,
                       scene.sphere ? toString(m) : "any", keep ? "yes" : "no", f.momentum, f.rate(), d.momentum,
                       d.rate());
           std::fflush(stdout);

@@ -249,7 +249,7 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
           forEachSpinChunk([&](Index b, Index e) {
             SpinSums pushed;
             for (Index i = b; i < e; ++i) {
-              if (w[i] > S(0)) pushed.addExternal(xPrev_[i], Vec3<S>(x[i] - xw[i].template head<3>()), w[i]);
+              if (w[i] > S(0)) pushed.addExternal(x[i], Vec3<S>(x[i] - xw[i].template head<3>()), w[i]);
               xw[i].template head<3>() = x[i];
             }
             return pushed;
@@ -457,30 +457,40 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
         respondContacts<friction()>(b, e, passes_.contacts(), x, xPrev_.data(), v, h, damping);
       });
     }, hasFriction_);
-    if (!(faces && settings_.propagationRings > 0 && settings_.propagationWeight > 0)) return;
+    const bool propagate = faces && settings_.propagationRings > 0 && settings_.propagationWeight > 0;
+    if (keepSpin_) {
+      propagateKeepingSpin(h, propagate);
+      return;
+    }
+    if (!propagate) return;
     DRAPE_OMP(single)
     propagation_.beginPass();
     const S weight = S(settings_.propagationWeight);
-    if (keepSpin_) {
-      propagateKeepingSpin(h, weight);
-      return;
-    }
     for (int ring = 1; ring <= settings_.propagationRings; ++ring)
       teamFor(vertexCount(), [&](Index b, Index e) {
         propagateRing(b, e, ring, passes_.contacts(), propagation_, asset_->vertexNeighbours, v, w, weight);
       });
   }
 
-  /// Propagation with Settings::keepAngularMomentum: each ring's shares are summed chunk by chunk into the moment
-  /// they add beside their sources' lines (propagateRing<true>), which a rotation of the free vertices takes out,
-  /// as restoreSpin does the solve's, about the same free axes and with the same masses.
-  void propagateKeepingSpin(S h, S weight) {
+  /// The contacts' moment from nothing, with Settings::keepAngularMomentum (docs/design.md §4), taken out by a
+  /// rotation of the free vertices about the free axes restoreSpin found, with the masses it summed:
+  /// - a contact moves a vertex by dx without changing its velocity, which changes its m x × v by m dx × v;
+  /// - with `propagate`, each ring's shares add a couple beside their sources' lines (propagateRing<true>).
+  /// Both are summed chunk by chunk, so the result does not depend on the thread count.
+  void propagateKeepingSpin(S h, bool propagate) {
     Vec3<S>* x = state_.x.data();
     Vec3<S>* v = state_.v.data();
+    const Vec4<S>* xw = packed_.data();  // where the velocity update left each vertex, before the contacts
     const S* w = state_.invMass.data();
+    forEachSpinChunk([&](Index b, Index e) { return sumContactMoves(b, e, xw, x, v, w); });
     DRAPE_OMP(single)
-    spinCouple_.setZero();
-    for (int ring = 1; ring <= settings_.propagationRings; ++ring) {
+    {
+      spinCouple_.setZero();
+      for (const SpinSums& c : spinChunks_) spinCouple_ += c.moment;
+      if (propagate) propagation_.beginPass();
+    }
+    const S weight = S(settings_.propagationWeight);
+    for (int ring = 1; propagate && ring <= settings_.propagationRings; ++ring) {
       forEachSpinChunk([&](Index b, Index e) {
         SpinSums c;
         c.moment = propagateRing<true>(b, e, ring, passes_.contacts(), propagation_, asset_->vertexNeighbours, v,
