@@ -125,7 +125,6 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     reconcile_ = has.reconcile;
     coupled_ = has.coupled;
     keepSpin_ = settings_.keepAngularMomentum;
-    propagation_.keepAnchors(keepSpin_, vertexCount());
     pinLocal_.resize(pins_.size());
     lambdaPins_.resize(pins_.size());
     for (std::size_t k = 0; k < pins_.size(); ++k)
@@ -303,9 +302,8 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
       for (const SpinSums& c : spinChunks_) total.add(c);
       total.moment -= spinExternal_.moment;
       total.push -= spinExternal_.push;
-      spinAxes_ = freeAxes(fixed_, xw, kFixedPointTolerance);
-      spinOn_ = restoringSpin(total, spinAxes_, double(h), spinOmega_, spinCentre_);
-      spinMasses_ = total;
+      const FreeAxes axes = freeAxes(fixed_, xw, kFixedPointTolerance);
+      spinOn_ = restoringSpin(total, axes, double(h), spinOmega_, spinCentre_);
     }
     if (!spinOn_) return;
     Vec3<S>* v = state_.v.data();
@@ -457,59 +455,18 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
         respondContacts<friction()>(b, e, passes_.contacts(), x, xPrev_.data(), v, h, damping);
       });
     }, hasFriction_);
-    const bool propagate = faces && settings_.propagationRings > 0 && settings_.propagationWeight > 0;
-    if (keepSpin_) {
-      propagateKeepingSpin(h, propagate);
-      return;
-    }
-    if (!propagate) return;
+    if (!(faces && settings_.propagationRings > 0 && settings_.propagationWeight > 0)) return;
     DRAPE_OMP(single)
     propagation_.beginPass();
     const S weight = S(settings_.propagationWeight);
-    for (int ring = 1; ring <= settings_.propagationRings; ++ring)
-      teamFor(vertexCount(), [&](Index b, Index e) {
-        propagateRing(b, e, ring, passes_.contacts(), propagation_, asset_->vertexNeighbours, v, w, weight);
-      });
-  }
-
-  /// The contacts' moment from nothing, with Settings::keepAngularMomentum (docs/design.md §4), taken out by a
-  /// rotation of the free vertices about the free axes restoreSpin found, with the masses it summed:
-  /// - a contact moves a vertex by dx without changing its velocity, which changes its m x × v by m dx × v;
-  /// - with `propagate`, each ring's shares add a couple beside their sources' lines (propagateRing<true>).
-  /// Both are summed chunk by chunk, so the result does not depend on the thread count.
-  void propagateKeepingSpin(S h, bool propagate) {
-    Vec3<S>* x = state_.x.data();
-    Vec3<S>* v = state_.v.data();
-    const Vec4<S>* xw = packed_.data();  // where the velocity update left each vertex, before the contacts
-    const S* w = state_.invMass.data();
-    forEachSpinChunk([&](Index b, Index e) { return sumContactMoves(b, e, xw, x, v, w); });
-    DRAPE_OMP(single)
-    {
-      spinCouple_.setZero();
-      for (const SpinSums& c : spinChunks_) spinCouple_ += c.moment;
-      if (propagate) propagation_.beginPass();
-    }
-    const S weight = S(settings_.propagationWeight);
-    for (int ring = 1; propagate && ring <= settings_.propagationRings; ++ring) {
-      forEachSpinChunk([&](Index b, Index e) {
-        SpinSums c;
-        c.moment = propagateRing<true>(b, e, ring, passes_.contacts(), propagation_, asset_->vertexNeighbours, v,
-                                       w, weight, x);
-        return c;
-      });
-      DRAPE_OMP(single)
-      for (const SpinSums& c : spinChunks_) spinCouple_ += c.moment;
-    }
-    DRAPE_OMP(single)
-    {
-      // A couple (no push): the same about every point. Over the substep, as the solve's moment is.
-      SpinSums sums = spinMasses_;
-      sums.moment = spinCouple_ * double(h);
-      sums.push.setZero();
-      spinOn_ = spinCouple_.squaredNorm() > 0 && restoringSpin(sums, spinAxes_, double(h), spinOmega_, spinCentre_);
-    }
-    if (!spinOn_) return;
-    teamFor(vertexCount(), [&](Index b, Index e) { applySpin(b, e, x, w, v, spinOmega_, spinCentre_); });
+    // With the angular momentum kept, each share follows the surface's curvature (propagateRing<true>).
+    withFlags([&](auto curved) {
+      for (int ring = 1; ring <= settings_.propagationRings; ++ring)
+        teamFor(vertexCount(), [&](Index b, Index e) {
+          propagateRing<curved()>(b, e, ring, passes_.contacts(), propagation_, asset_->vertexNeighbours, v, w,
+                                  weight, x);
+        });
+    }, keepSpin_);
   }
 
 
@@ -541,9 +498,6 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
   std::vector<Index> fixed_;            ///< the kinematic vertices (inverse mass 0)
   std::vector<SpinSums> spinChunks_;    ///< each chunk's sums
   SpinSums spinExternal_;               ///< the external pushes inside this substep's solve
-  SpinSums spinMasses_;                 ///< the free vertices' masses and moments, as restoreSpin summed them
-  FreeAxes spinAxes_;                   ///< the axes restoreSpin restored about
-  Eigen::Vector3d spinCouple_ = Eigen::Vector3d::Zero();  ///< the propagation's couple (propagateKeepingSpin)
   Eigen::Vector3d spinOmega_ = Eigen::Vector3d::Zero(), spinCentre_ = Eigen::Vector3d::Zero();
 };
 

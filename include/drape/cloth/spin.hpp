@@ -81,26 +81,6 @@ SpinSums sumSolvePushes(Index begin, Index end, const Vec4<S>* solved, const Vec
   return s;
 }
 
-/// The moment the contacts' moves dx = x - x_updated of the free vertices [begin, end) gave the cloth without
-/// a force, sum m dx × v (kg m^2/s, in `moment`): a move changes m x × v, and unlike the solve's push it never
-/// becomes velocity.
-template <Scalar S>
-SpinSums sumContactMoves(Index begin, Index end, const Vec4<S>* updated, const Vec3<S>* x, const Vec3<S>* v,
-                         const S* invMass) {
-  double mx = 0, my = 0, mz = 0;
-  for (Index i = begin; i < end; ++i) {
-    if (!(invMass[i] > S(0))) continue;
-    const double m = 1.0 / double(invMass[i]);
-    const double d0 = m * (double(x[i][0]) - double(updated[i][0])), d1 = m * (double(x[i][1]) - double(updated[i][1])),
-                 d2 = m * (double(x[i][2]) - double(updated[i][2]));
-    const double v0 = double(v[i][0]), v1 = double(v[i][1]), v2 = double(v[i][2]);
-    mx += d1 * v2 - d2 * v1, my += d2 * v0 - d0 * v2, mz += d0 * v1 - d1 * v0;
-  }
-  SpinSums s;
-  s.moment = {mx, my, mz};
-  return s;
-}
-
 /// The axes about which the kinematic vertices cannot turn the cloth: every axis through their common point,
 /// the line they lie on, or none.
 struct FreeAxes {
@@ -158,10 +138,9 @@ inline bool restoringSpin(const SpinSums& s, const FreeAxes& axes, double h, Eig
   return omega.allFinite();
 }
 
-/// v += omega × (x - centre) for the free vertices [begin, end): omega × x less omega × centre, in S. The
-/// positions are packed (Vec4, the solve's) or not (Vec3).
-template <Scalar S, class Position>
-void applySpin(Index begin, Index end, const Position* solved, const S* invMass, Vec3<S>* v,
+/// v += omega × (x - centre) for the free vertices [begin, end): omega × x less omega × centre, in S.
+template <Scalar S>
+void applySpin(Index begin, Index end, const Vec4<S>* solved, const S* invMass, Vec3<S>* v,
                const Eigen::Vector3d& omega, const Eigen::Vector3d& centre) {
   const Vec3<S> o = omega.cast<S>(), base = omega.cross(centre).cast<S>();
   for (Index i = begin; i < end; ++i) {

@@ -575,8 +575,6 @@ template <Scalar S> struct PropagationBuffer {
   std::vector<std::uint64_t> reach[2];
   std::vector<Vec3<S>> normal;
   std::vector<S> normalSpeed, amount;
-  /// Where each reached vertex's share came from (propagateRing<true>): sized by keepAnchors only.
-  std::vector<Vec3<S>> anchor;
 
   void resize(Index n) {
     pass = 0;
@@ -585,11 +583,6 @@ template <Scalar S> struct PropagationBuffer {
     normal.resize(n);
     normalSpeed.resize(n);
     amount.resize(n);
-    if (!anchor.empty()) anchor.resize(n);
-  }
-  void keepAnchors(bool keep, Index n) {
-    if (keep) anchor.resize(n);
-    else std::vector<Vec3<S>>().swap(anchor);
   }
   /// Starts a propagation: the rings of earlier ones no longer count as reached.
   void beginPass() { ++pass; }
@@ -605,17 +598,16 @@ template <Scalar S> struct PropagationBuffer {
 /// sums have one order whatever the thread count. This is ring `ring` (1, 2, ...) for vertices [begin, end),
 /// after buf.beginPass(); ring r + 1 starts when every vertex is done with ring r.
 ///
-/// With kCouple (Settings::keepAngularMomentum, docs/design.md §4) it also returns the moment the shares add
-/// beside what their sources' contacts would: a share stands in for a push its sources took from the solid, so
-/// its line of action belongs through them (ring 1: the mean of the source vertices' positions `x`; later rings:
-/// the mean of their sources' anchors), not through the vertex it moves. On a ball the sources' mean point and
-/// mean normal give a line through the centre; at the vertex the share turns the cloth about it. Returned is
-/// sum m (x_j - anchor_j) × dv_j, in double, for the caller to take out.
-template <bool kCouple = false, Scalar S>
-Eigen::Vector3d propagateRing(Index begin, Index end, int ring, const ContactBuffer<S>& contacts,
-                              PropagationBuffer<S>& buf, const Adjacency& neighbours, Vec3<S>* v, const S* invMass,
-                              S weight, const Vec3<S>* x = nullptr) {
-  [[maybe_unused]] double cx = 0, cy = 0, cz = 0;
+/// With kCurved (Settings::keepAngularMomentum, docs/design.md §4) a share follows the surface's curvature: the
+/// sources' mean normal, on a line through the vertex it moves rather than through the sources, turns the cloth
+/// on a curved solid (on a ball that line misses the centre by about the offset between the vertex and its
+/// sources). So the normal is carried from the sources' mean position `x` to the vertex with the curvature
+/// their positions and normals give, sum (d_i - mean d) . (n_i - mean n) / sum |d_i - mean d|^2 (exact on a
+/// ball, 0 on a plane), where at least two sources are spread apart.
+template <bool kCurved = false, Scalar S>
+void propagateRing(Index begin, Index end, int ring, const ContactBuffer<S>& contacts, PropagationBuffer<S>& buf,
+                   const Adjacency& neighbours, Vec3<S>* v, const S* invMass, S weight,
+                   [[maybe_unused]] const Vec3<S>* x = nullptr) {
   const std::uint32_t mark = contacts.current;
   const std::uint64_t from = buf.key(ring - 1), to = buf.key(ring);
   const std::uint64_t* reachFrom = buf.reach[(ring - 1) & 1].data();
@@ -624,24 +616,31 @@ Eigen::Vector3d propagateRing(Index begin, Index end, int ring, const ContactBuf
     if (contacts.stamp[j] == mark || invMass[j] == S(0)) continue;
     if (ring > 1 && buf.reachedThisPass(j)) continue;  // settled in an earlier ring
     Vec3<S> normalSum = Vec3<S>::Zero();
-    [[maybe_unused]] Vec3<S> anchorSum = Vec3<S>::Zero();
+    // kCurved: the sources' offsets d = x_i - x_j and the sums the curvature is fitted from
+    [[maybe_unused]] Vec3<S> offsetSum = Vec3<S>::Zero();
+    [[maybe_unused]] S offsetNormal = 0, offsetSquared = 0;
     S speedSum = 0, amountSum = 0;
     int count = 0;
     for (const Index* it = neighbours.begin(j); it != neighbours.end(j); ++it) {
       const Index i = *it;
+      Vec3<S> ni;
       if (ring == 1) {
         if (contacts.stamp[i] != mark || contacts.normalDv[i] <= S(0)) continue;
-        const Vec3<S> ni = contacts.normal(i);
-        normalSum += ni;
+        ni = contacts.normal(i);
         speedSum += ni.dot(contacts.solidVelocity(i));
         amountSum += contacts.normalDv[i];
-        if constexpr (kCouple) anchorSum += x[i];
       } else {
         if (reachFrom[i] != from || buf.amount[i] <= S(0)) continue;
-        normalSum += buf.normal[i];
+        ni = buf.normal[i];
         speedSum += buf.normalSpeed[i];
         amountSum += buf.amount[i];
-        if constexpr (kCouple) anchorSum += buf.anchor[i];
+      }
+      normalSum += ni;
+      if constexpr (kCurved) {
+        const Vec3<S> d = x[i] - x[j];
+        offsetSum += d;
+        offsetNormal += d.dot(ni);
+        offsetSquared += d.squaredNorm();
       }
       ++count;
     }
@@ -651,31 +650,29 @@ Eigen::Vector3d propagateRing(Index begin, Index end, int ring, const ContactBuf
     const S len = normalSum.norm();
     if (len <= S(0)) continue;
     const S inv = S(1) / S(count);
-    const Vec3<S> nj = normalSum / len;
+    Vec3<S> nj = normalSum / len;
+    if constexpr (kCurved) {
+      const Vec3<S> mean = offsetSum * inv;  // the sources' mean position, from the vertex
+      const S spread = offsetSquared - S(count) * mean.squaredNorm();
+      if (count > 1 && spread > S(1e-4) * offsetSquared) {
+        const S curvature = (offsetNormal - mean.dot(normalSum)) / spread;
+        const Vec3<S> carried = nj - curvature * (mean - nj.dot(mean) * nj);
+        const S carriedLength = carried.norm();
+        if (carriedLength > S(0) && std::isfinite(carriedLength)) nj = carried / carriedLength;
+      }
+    }
     // The solids' speed along nj: each source's own normal speed, summed as nj sums their normals. A spinning
     // solid's surface moves along itself, and its material velocity's tangential part, averaged over points
     // with different normals, is not a speed toward the cloth.
     const S vcn = speedSum / len;
     const S approach = -(nj.dot(v[j]) - vcn);
     const S give = weight * amountSum * inv;
-    if (approach > S(0)) {
-      const S dv = std::min(approach, give);
-      v[j] += dv * nj;
-      if constexpr (kCouple) {
-        const Vec3<S> r = x[j] - anchorSum * inv;
-        const double p = double(dv) / double(invMass[j]);
-        cx += p * (double(r[1]) * double(nj[2]) - double(r[2]) * double(nj[1]));
-        cy += p * (double(r[2]) * double(nj[0]) - double(r[0]) * double(nj[2]));
-        cz += p * (double(r[0]) * double(nj[1]) - double(r[1]) * double(nj[0]));
-      }
-    }
+    if (approach > S(0)) v[j] += std::min(approach, give) * nj;
     // The next ring sees this ring's share, not what it happened to need.
     buf.amount[j] = give;
     buf.normal[j] = nj;
     buf.normalSpeed[j] = vcn;
-    if constexpr (kCouple) buf.anchor[j] = anchorSum * inv;
   }
-  return {cx, cy, cz};
 }
 
 }  // namespace drape
