@@ -108,8 +108,8 @@ struct Settings {
   /// Restores, after each substep's constraint solve, the angular momentum its corrections added from nothing
   /// (docs/design.md §4): without it a cloth draped on a frictionless sphere turns about the sphere's axis at
   /// 0.2-0.65 rad/s after 10 s at 10 substeps, with it under 2e-3. On balls and capsules each face contact's
-  /// corner then also answers along its own normal, and propagation follows the surface's curvature. Costs two passes over the vertices per substep, about 30 % of a step. CPU only,
-  /// for now.
+  /// corner then also answers along its own normal, and propagation follows the surface's curvature. Costs two
+  /// passes over the vertices per substep, about 30 % of a step. CPU only, for now.
   bool keepAngularMomentum = false;
   double propagationWeight = 0.5;  ///< share of a contact's normal velocity correction given to neighbours
   int propagationRings = 1;        ///< how many rings of neighbours receive it (0: none)

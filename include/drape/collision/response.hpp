@@ -12,6 +12,7 @@
 #include <drape/detail/parallel.hpp>
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <vector>
