@@ -1,7 +1,8 @@
 // Spin from nothing (docs/design.md §4): a 41x41 cloth (2 cm) draped from the top of a frictionless 0.3 m sphere,
 // its centre vertex pinned on the vertical axis through the sphere's centre. No force can turn the cloth about
 // that axis, so its mass-weighted angular momentum about it, L_z = sum m (x v_y - y v_x), should stay at zero.
-// Printed for every collision method, float and double, the sphere at rest and spinning at 2 rad/s, at each
+// Printed for every collision method, float and double, the sphere at rest and spinning at 2 rad/s and a
+// standing capsule with the same top (the skirt hangs down its side, curved about the axis only), at each
 // substep count given, with Settings::keepAngularMomentum off and on: L_z after the run, and L_z / I_z (the
 // cloth's turn, rad/s). The same cloth hanging from its pin with no solid at all shows the constraint solve's
 // share.
@@ -18,15 +19,18 @@ namespace {
 
 using namespace drape;
 
+enum class Under { Nothing, Sphere, Capsule };
+
 template <class S>
-scenes::AxialSpin run(CollisionMethod method, int substeps, double spin, bool sphere, double seconds, bool keep) {
+scenes::AxialSpin run(CollisionMethod method, int substeps, double spin, Under under, double seconds, bool keep) {
   using scenes::SphereDrape;
   Settings settings;
   settings.collisionMethod = method;
   settings.subStepCount = substeps;
   settings.keepAngularMomentum = keep;
   Solver<S> solver(SphereDrape::asset<S>(), settings);
-  if (sphere) solver.addSolid(SphereDrape::sphere(spin));
+  if (under == Under::Sphere) solver.addSolid(SphereDrape::sphere(spin));
+  if (under == Under::Capsule) solver.addSolid(SphereDrape::standingCapsule(spin));
   solver.pin(SphereDrape::kCentre);
   for (int f = 0; f < int(seconds * 60 + 0.5); ++f) solver.step(1.0 / 60.0);
   return scenes::axialSpin(solver);
@@ -53,19 +57,22 @@ int main(int argc, char** argv) {
   std::printf("|---|---:|---|---|---:|---:|---:|---:|\n");
   struct Scene {
     const char* name;
-    bool sphere;
+    Under under;
     double spin;
   };
-  for (const Scene scene : {Scene{"sphere at rest", true, 0.0}, Scene{"sphere spinning at 2 rad/s", true, 2.0},
-                            Scene{"no solid", false, 0.0}})
+  for (const Scene scene : {Scene{"sphere at rest", Under::Sphere, 0.0},
+                            Scene{"sphere spinning at 2 rad/s", Under::Sphere, 2.0},
+                            Scene{"standing capsule at rest", Under::Capsule, 0.0},
+                            Scene{"no solid", Under::Nothing, 0.0}})
     for (int n : substeps)
       for (CollisionMethod m : {CollisionMethod::Faces, CollisionMethod::Vertices, CollisionMethod::InSolve})
         for (const bool keep : {false, true}) {
-          if (!scene.sphere && m != CollisionMethod::Faces) continue;  // no contact: the methods are one
-          const scenes::AxialSpin f = run<float>(m, n, scene.spin, scene.sphere, seconds, keep);
-          const scenes::AxialSpin d = run<double>(m, n, scene.spin, scene.sphere, seconds, keep);
+          const bool solid = scene.under != Under::Nothing;
+          if (!solid && m != CollisionMethod::Faces) continue;  // no contact: the methods are one
+          const scenes::AxialSpin f = run<float>(m, n, scene.spin, scene.under, seconds, keep);
+          const scenes::AxialSpin d = run<double>(m, n, scene.spin, scene.under, seconds, keep);
           std::printf("| %s | %d | %s | %s | %+.2e | %+.1e | %+.2e | %+.1e |\n", scene.name, n,
-                      scene.sphere ? toString(m) : "any", keep ? "yes" : "no", f.momentum, f.rate(), d.momentum,
+                      solid ? toString(m) : "any", keep ? "yes" : "no", f.momentum, f.rate(), d.momentum,
                       d.rate());
           std::fflush(stdout);
         }

@@ -1,7 +1,7 @@
 #pragma once
-// A 41x41 cloth (2 cm spacing) lying on the top of a frictionless kinematic 0.3 m sphere at the origin, its centre
-// vertex on the vertical axis through the sphere's centre, where it is pinned: nothing can turn the cloth about
-// that axis (docs/design.md §4, "No spin from nothing").
+// A 41x41 cloth (2 cm spacing) lying on the top of a frictionless kinematic 0.3 m sphere at the origin (or of a
+// standing capsule with the same top), its centre vertex on the vertical axis through the sphere's centre, where
+// it is pinned: nothing can turn the cloth about that axis (docs/design.md §4, "No spin from nothing").
 
 #include <drape/drape.hpp>
 
@@ -28,6 +28,17 @@ struct SphereDrape {
     ball.motion = Motion::Kinematic;
     ball.angularVelocity = {0, 0, spin};
     return ball;
+  }
+  /// A frictionless kinematic capsule of the sphere's radius standing on the vertical axis, its top cap where the
+  /// sphere is: the cloth's skirt hangs down its side, where the surface curves about the axis only.
+  static Solid<Capsule> standingCapsule(double spin = 0) {
+    Solid<Capsule> post;
+    post.shape.radius = kRadius;
+    post.shape.halfHeight = kRadius;
+    post.pose.position = {0, 0, -kRadius};
+    post.motion = Motion::Kinematic;
+    post.angularVelocity = {0, 0, spin};
+    return post;
   }
 };
 

@@ -424,6 +424,7 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     PassInputs<S> in{state_.x.data(),       state_.invMass.data(),        xPredicted_.data(),
                      asset_->triangles,      thickness,                    settings_.pgdIterations,
                      settings_.culling,      settings_.exactGridSearch,    keepSpin_};
+    if (keepSpin_ && settings_.collisionMethod != CollisionMethod::InSolve) in.keepTurn = state_.v.data();
     if (sweep_ && h > S(0)) {
       const S gate = S(constants::kSweepGate) * thickness;
       in.sweep = {xPrev_.data(), h, gate * gate};

@@ -29,6 +29,9 @@ template <Scalar S> struct PassInputs {
   bool exactGridSearch;
   /// Face contacts on smooth fields record each corner's own normal (Settings::keepAngularMomentum).
   bool ownNormals = false;
+  /// The velocities after the update, whose moment about a smooth solid's centre of curvature the contacts keep
+  /// (Settings::keepAngularMomentum, after the solve; keepTurnAbout). Null: left alone.
+  Vec3<S>* keepTurn = nullptr;
   /// Continuous contact (docs/design.md §18): the start positions and the substep (sweep.start null: off), and
   /// the farthest any vertex travelled this substep.
   SweepInputs<S> sweep = {};
@@ -162,7 +165,7 @@ template <Scalar S> class ContactPasses {
           bins_.noteDrift(projectFaceContacts<kCull, true, kSweep>(
               solid, thickness, in.pgdIterations, in.triangles, ItemList{nearFaces_.data()},
               Index(nearFaces_.size()), x, w, contacts_, stats_, bins_.binned(), in.exactGridSearch, in.sweep,
-              in.ownNormals));
+              in.ownNormals, in.keepTurn));
         }
       }
     } else {
@@ -174,7 +177,7 @@ template <Scalar S> class ContactPasses {
         {
           const S moved = projectFaceContacts<kCull, false, kSweep>(
               solid, thickness, in.pgdIterations, in.triangles, AllItems{}, Index(in.triangles.size()), x, w,
-              contacts_, stats_, binned, in.exactGridSearch, in.sweep, in.ownNormals);
+              contacts_, stats_, binned, in.exactGridSearch, in.sweep, in.ownNormals, in.keepTurn);
           if (useBins_) bins_.noteDrift(moved);
         }
       }
@@ -197,7 +200,7 @@ template <Scalar S> class ContactPasses {
     VertexPassShare<S> share;
     teamForNoWait(count, [&](Index b, Index e) {
       share = projectVertexContacts<kSweep>(b, e, solid, in.thickness, in.x, in.invMass, ids, contacts_, binned,
-                                            slack, in.sweep);
+                                            slack, in.sweep, in.keepTurn);
     });
     teamAdd(stats_.vertexContacts, share.found);
     teamAdd(stats_.sdfEvaluations, share.evaluated);

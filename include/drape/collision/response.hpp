@@ -199,6 +199,30 @@ template <Scalar S> struct SweepInputs {
   }
 };
 
+/// With Settings::keepAngularMomentum (docs/design.md §4): a contact moved a vertex from `before` to `after`, out
+/// of a smooth solid, and leaves its velocity v to the response. Moved out along a ball's normal from radius r0 to
+/// r1 with its velocity unchanged, the vertex would gain m (r1 - r0) n x v of angular momentum about the centre;
+/// at few substeps that feeds back into the cloth's turn, which grows each second. So the velocity across the
+/// line to the centre of curvature (relative to that centre's motion) is scaled by r0 / r1: the vertex's moment
+/// about the centre stays what it was. About a capsule's side, only the velocity around the axis is. On a plane
+/// nothing is scaled, as no smooth field is flat. A vertex a swept contact brings back across a thin solid's centre
+/// is left alone, and no speed is raised: the scale is at most 1.
+template <class Shape, Scalar S>
+DRAPE_ALWAYS_INLINE void keepTurnAbout(const Sdf<Shape, S>& sdf, const SolidMotion<S>& m, const Vec3<S>& before,
+                                       const Vec3<S>& after, Vec3<S>& v) {
+  Vec3<S> axis;
+  const Vec3<S> c = sdf.curvatureCentre(after, axis);
+  Vec3<S> d0 = before - c, d1 = after - c;
+  d0 -= axis.dot(d0) * axis;
+  d1 -= axis.dot(d1) * axis;
+  const S r1 = d1.norm();
+  if (!(r1 > S(0)) || !(d0.dot(d1) > S(0))) return;
+  const Vec3<S> u = d1 / r1;
+  const Vec3<S> rel = v - m.velocityAt(c);
+  const Vec3<S> across = rel - u.dot(rel) * u - axis.dot(rel) * axis;
+  v += (std::min(d0.norm() / r1, S(1)) - S(1)) * across;
+}
+
 /// Which vertices (or faces) a pass visits: all of them, or a list from the broad phase. Both are inlined, so
 /// the full pass pays nothing for the choice.
 struct AllItems {
@@ -223,16 +247,20 @@ template <Scalar S> struct VertexPassShare {
 /// gate is first searched along that path (sweepPoint). Where the path came within the thickness, the vertex goes
 /// to the thickness beyond the field's tangent plane there: the side the path came from, whatever side of a thin
 /// solid it ended on. The discrete test then runs on where that left it.
-template <bool kBody, bool kSweep, class Shape, Scalar S, class Ids>
+///
+/// With kKeepTurn (a smooth field, Settings::keepAngularMomentum), a moved vertex's velocity in `v` keeps its moment
+/// about the solid's centre of curvature (keepTurnAbout).
+template <bool kBody, bool kSweep, bool kKeepTurn = false, class Shape, Scalar S, class Ids>
 VertexPassShare<S> projectVertexContactsAs(Index begin, Index end, const CompiledSolid<Shape, S>& solid,
                                            S thickness, Vec3<S>* x, const S* invMass, Ids ids,
                                            ContactBuffer<S>& contacts, const Vec3<S>* binned, S slack,
-                                           const SweepInputs<S>& sweep) {
+                                           const SweepInputs<S>& sweep, [[maybe_unused]] Vec3<S>* v = nullptr) {
   VertexPassShare<S> share;
   S moved = 0;
   for (Index k = begin; k < end; ++k) {
     const Index i = ids[k];
     if (invMass[i] == S(0)) continue;
+    [[maybe_unused]] Vec3<S> start = x[i];  // kKeepTurn: where the last move started
     if constexpr (kSweep) {
       const Vec3<S> from = sweep.startOf(i, solid.motion);
       if ((x[i] - from).squaredNorm() > sweep.gate2) {
@@ -246,6 +274,10 @@ VertexPassShare<S> projectVertexContactsAs(Index begin, Index end, const Compile
           // A coupled body's push acts on the line through the point where the path met the solid.
           contacts.template record<kBody>(i, x[i], hit.normal, dn, solid.motion, hit.point,
                                           solid.motion.contactVelocityAt(x[i], hit.normal, hit.point));
+          if constexpr (kKeepTurn) {
+            keepTurnAbout(solid.sdf, solid.motion, start, x[i], v[i]);
+            start = x[i];
+          }
           moved = std::max(moved, (x[i] - binned[i]).squaredNorm());
           ++share.sweptFound;
         }
@@ -257,6 +289,7 @@ VertexPassShare<S> projectVertexContactsAs(Index begin, Index end, const Compile
     const S dn = thickness - phi;
     x[i] += dn * n;
     contacts.template record<kBody>(i, x[i], n, dn, solid.motion, x[i], solid.motion.velocityAt(x[i]));
+    if constexpr (kKeepTurn) keepTurnAbout(solid.sdf, solid.motion, start, x[i], v[i]);
     moved = std::max(moved, (x[i] - binned[i]).squaredNorm());
     ++share.found;
   }
@@ -267,7 +300,13 @@ VertexPassShare<S> projectVertexContactsAs(Index begin, Index end, const Compile
 template <bool kSweep = false, class Shape, Scalar S, class Ids>
 VertexPassShare<S> projectVertexContacts(Index begin, Index end, const CompiledSolid<Shape, S>& solid, S thickness,
                                          Vec3<S>* x, const S* invMass, Ids ids, ContactBuffer<S>& contacts,
-                                         const Vec3<S>* binned, S slack = S(0), const SweepInputs<S>& sweep = {}) {
+                                         const Vec3<S>* binned, S slack = S(0), const SweepInputs<S>& sweep = {},
+                                         Vec3<S>* keepTurn = nullptr) {
+  if constexpr (requires { Sdf<Shape, S>::kSmooth; }) {
+    if (keepTurn != nullptr && solid.motion.body < 0)
+      return projectVertexContactsAs<false, kSweep, true>(begin, end, solid, thickness, x, invMass, ids, contacts,
+                                                          binned, slack, sweep, keepTurn);
+  }
   return withFlags([&](auto body) {
     return projectVertexContactsAs<body(), kSweep>(begin, end, solid, thickness, x, invMass, ids, contacts, binned,
                                                    slack, sweep);
@@ -291,13 +330,15 @@ VertexPassShare<S> projectVertexContacts(Index begin, Index end, const CompiledS
 /// With kSweep (continuous contact), a face whose corners travelled further than the gate relative to the solid
 /// is first searched along its path (sweepFace); from its first contact on, no corner goes further against the
 /// contact normal than it was then. The discrete query then runs on where that left it. With kOwnNormals (a
-/// smooth field, Settings::keepAngularMomentum), each corner's record takes the field's normal at the corner.
+/// smooth field, Settings::keepAngularMomentum), each corner's record takes the field's normal at the corner, and
+/// where `keepTurn` is given (the velocities, after the update), a moved corner's velocity keeps its moment about
+/// the centre of curvature (keepTurnAbout).
 template <bool kCull, bool kBody, bool kBoxed, bool kSweep, bool kOwnNormals = false, class Shape, Scalar S,
           class Ids>
 S projectFaceContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, int pgdIterations,
                         const std::vector<std::array<Index, 3>>& triangles, Ids ids, Index count, Vec3<S>* x,
                         const S* invMass, ContactBuffer<S>& contacts, CollisionStats& stats, const Vec3<S>* binned,
-                        bool exactSearch, const SweepInputs<S>& sweep) {
+                        bool exactSearch, const SweepInputs<S>& sweep, [[maybe_unused]] Vec3<S>* keepTurn = nullptr) {
   S moved = 0;
   [[maybe_unused]] const Vec3<S> boxLow = solid.boxLow.array() - thickness;
   [[maybe_unused]] const Vec3<S> boxHigh = solid.boxHigh.array() + thickness;
@@ -371,6 +412,7 @@ S projectFaceContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, int p
     for (int k = 0; k < 3; ++k) {
       if (wb[k] <= S(0)) continue;
       const S dn = wb[k] / denom * depth;
+      [[maybe_unused]] const Vec3<S> before = x[t[k]];
       x[t[k]] += dn * q.normal;
       Vec3<S> n = q.normal, anchor = placed;
       if constexpr (kOwnNormals) {
@@ -380,6 +422,7 @@ S projectFaceContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, int p
         Vec3<S> g;
         const S phi = solid.sdf(x[t[k]], g);
         if (g.dot(q.normal) >= S(constants::kMergeCos)) n = g, anchor = x[t[k]] - phi * g;
+        if (keepTurn != nullptr) keepTurnAbout(solid.sdf, solid.motion, before, x[t[k]], keepTurn[t[k]]);
       }
       contacts.template record<kBody>(t[k], x[t[k]], n, dn, solid.motion, anchor,
                                       solid.motion.contactVelocityAt(x[t[k]], n, anchor));
@@ -393,14 +436,15 @@ template <bool kCull, bool kBoxed = false, bool kSweep = false, class Shape, Sca
 S projectFaceContacts(const CompiledSolid<Shape, S>& solid, S thickness, int pgdIterations,
                       const std::vector<std::array<Index, 3>>& triangles, Ids ids, Index count, Vec3<S>* x,
                       const S* invMass, ContactBuffer<S>& contacts, CollisionStats& stats, const Vec3<S>* binned,
-                      bool exactSearch = true, const SweepInputs<S>& sweep = {}, bool ownNormals = false) {
+                      bool exactSearch = true, const SweepInputs<S>& sweep = {}, bool ownNormals = false,
+                      Vec3<S>* keepTurn = nullptr) {
   constexpr bool kSmooth = requires { Sdf<Shape, S>::kSmooth; };
   const bool body = solid.motion.body >= 0;
   if constexpr (kSmooth) {
     if (ownNormals && !body)
       return projectFaceContactsAs<kCull, false, kBoxed, kSweep, true>(solid, thickness, pgdIterations, triangles,
                                                                        ids, count, x, invMass, contacts, stats,
-                                                                       binned, exactSearch, sweep);
+                                                                       binned, exactSearch, sweep, keepTurn);
   }
   return withFlags([&](auto isBody) {
     return projectFaceContactsAs<kCull, isBody(), kBoxed, kSweep>(solid, thickness, pgdIterations, triangles, ids,

@@ -40,6 +40,12 @@ template <Scalar S> struct Sdf<Sphere, S> {
     gradient = len > S(0) ? Vec3<S>(d / len) : Vec3<S>::UnitZ();
     return len - radius;
   }
+  /// What the level surface through x curves about: a point, about which it curves along every tangent (axis
+  /// set to zero), or a line through the point along a unit axis, about which it curves around the axis only.
+  Vec3<S> curvatureCentre(const Vec3<S>&, Vec3<S>& axis) const {
+    axis.setZero();
+    return centre;
+  }
 };
 
 template <Scalar S> struct Sdf<Box, S> {
@@ -90,6 +96,17 @@ template <Scalar S> struct Sdf<Capsule, S> {
       gradient = axis.unitOrthogonal();
     }
     return len - radius;
+  }
+  /// What the level surface through x curves about (Sdf<Sphere>::curvatureCentre): the axis along the side, a
+  /// cap's centre beyond the ends.
+  Vec3<S> curvatureCentre(const Vec3<S>& x, Vec3<S>& around) const {
+    const S t = (x - centre).dot(axis);
+    if (std::abs(t) < halfHeight) {
+      around = axis;
+      return centre + t * axis;
+    }
+    around.setZero();
+    return centre + std::clamp(t, -halfHeight, halfHeight) * axis;
   }
 };
 
