@@ -172,11 +172,13 @@ void ballScene(benchmark::State& state) {
   settings.collisionMethod = state.range(0) == 0 ? drape::CollisionMethod::Faces : drape::CollisionMethod::Vertices;
   settings.threadCount = int(state.range(2));
   drape::Solver<float> solver = settledOnBall(settings, state.range(1) == 256);
-  long long faceContacts = 0, vertexContacts = 0, steps = 0;
+  long long faceContacts = 0, vertexContacts = 0, facesTested = 0, facesCulled = 0, steps = 0;
   for (auto _ : state) {
     solver.step(1.0 / 60, [&](const auto& s) {
       faceContacts += s.stats().faceContacts;
       vertexContacts += s.stats().vertexContacts;
+      facesTested += s.stats().facesTested;
+      facesCulled += s.stats().facesCulled;
     });
     ++steps;
     benchmark::ClobberMemory();
@@ -187,6 +189,8 @@ void ballScene(benchmark::State& state) {
   const double substeps = double(steps) * settings.subStepCount;
   state.counters["face_contacts"] = double(faceContacts) / substeps;
   state.counters["vertex_contacts"] = double(vertexContacts) / substeps;
+  state.counters["faces_tested"] = double(facesTested) / substeps;
+  state.counters["faces_culled"] = double(facesCulled) / substeps;
 }
 
 /// What Settings::keepAngularMomentum costs (docs/design.md §4), on one thread: scene 0 is the slope (faces, 10

@@ -1,0 +1,82 @@
+// Rest at few substeps (docs/design.md, Known limits): a 40x40 cloth (2 cm) that should come to rest on a solid,
+// stepped at 60 Hz for a while, and the RMS speed of all its vertices read at a quarter, half and all of the run,
+// and at the end that of the vertices within 2 cm of the solid.
+// The scenes are the ones where drape's contacts are hardest to bring to rest: a ridge (the slope sample's box
+// turned 45 degrees, an edge on top, mu 0.5), a cube standing on a corner (mu 0.5), a 3 mm rod (a capsule,
+// mu 0.5, continuous contact on) and a 0.2 m ball (mu 0.5), each for every collision method, float and double.
+// A cloth has no damping of its own: where it hangs free (the skirt over the ball) it swings down only through the
+// solver's dissipation, so that part of a reading is not trembling.
+// Run: build/bench/rest_drift [seconds, default 20] [substep counts..., default 2]
+#include <drape/drape.hpp>
+
+#include <rest_scenes.hpp>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <vector>
+
+namespace {
+
+using namespace drape;
+using scenes::RestScene;
+
+/// The RMS speed of all vertices at a quarter, half and all of the run; at the end, that of the vertices within
+/// kNear of the solid (the contacts and their neighbours, not the free skirt), and the lowest vertex (a cloth that
+/// fell through is far below the solid).
+constexpr double kNear = 0.02;  ///< m
+struct Reading {
+  double rms[3] = {0, 0, 0};
+  double nearRms = 0;
+  double lowest = 0;
+};
+
+template <class S> Reading run(RestScene scene, CollisionMethod method, int substeps, double seconds) {
+  scenes::Distance distance;
+  Solver<S> solver = scenes::makeRestScene<S>(scene, method, substeps, distance);
+  const int frames = int(seconds * 60 + 0.5);
+  const int marks[3] = {frames / 4, frames / 2, frames};
+  Reading r;
+  for (int f = 1; f <= frames; ++f) {
+    solver.step(1.0 / 60.0);
+    for (int k = 0; k < 3; ++k)
+      if (f == marks[k]) r.rms[k] = scenes::rmsSpeed(solver);
+  }
+  r.nearRms = scenes::rmsSpeedNear(solver, distance, kNear);
+  r.lowest = 1e300;
+  for (Index i = 0; i < solver.vertexCount(); ++i) r.lowest = std::min(r.lowest, solver.position(i).z());
+  return r;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const double seconds = argc > 1 ? std::atof(argv[1]) : 20.0;
+  std::vector<int> substeps;
+  for (int a = 2; a < argc; ++a) substeps.push_back(std::atoi(argv[a]));
+  if (substeps.empty()) substeps = {2};
+  if (!(seconds >= 0.1) || seconds > 600) {
+    std::fprintf(stderr, "rest_drift: seconds must be in [0.1, 600]\n");
+    return 2;
+  }
+  for (int n : substeps)
+    if (n < 1 || n > 1000) {
+      std::fprintf(stderr, "rest_drift: substep counts must be in [1, 1000]\n");
+      return 2;
+    }
+  std::printf("RMS speed of all vertices (m/s) after %g, %g and %g s; the lowest vertex at the end (m).\n\n",
+              seconds / 4, seconds / 2, seconds);
+  std::printf("| scene | substeps | method | scalar | RMS at %g s | at %g s | at %g s | within 2 cm at %g s | lowest |\n",
+              seconds / 4, seconds / 2, seconds, seconds);
+  std::printf("|---|---:|---|---|---:|---:|---:|---:|---:|\n");
+  for (RestScene scene : {RestScene::Ridge, RestScene::Corner, RestScene::Rod, RestScene::Ball})
+    for (int n : substeps)
+      for (CollisionMethod m : {CollisionMethod::Faces, CollisionMethod::InSolve, CollisionMethod::Vertices})
+        for (bool isFloat : {true, false}) {
+          const Reading r = isFloat ? run<float>(scene, m, n, seconds) : run<double>(scene, m, n, seconds);
+          std::printf("| %s | %d | %s | %s | %.1e | %.1e | %.1e | %.1e | %.3f |\n", scenes::name(scene), n, toString(m),
+                      isFloat ? "float" : "double", r.rms[0], r.rms[1], r.rms[2], r.nearRms, r.lowest);
+          std::fflush(stdout);
+        }
+  return 0;
+}

@@ -1,0 +1,103 @@
+#pragma once
+// Scenes where a cloth should come to rest on a solid and drape's contacts find that hardest (docs/design.md,
+// Known limits): a 40x40 cloth (2 cm) on a ridge (the slope sample's box turned 45 degrees, an edge on top), on a
+// cube standing on a corner, on a 3 mm rod (a capsule, continuous contact on) and on a 0.2 m ball, all at mu 0.5.
+// Each comes with the solid's distance field, to tell the vertices near it from the free skirt.
+
+#include <drape/drape.hpp>
+
+#include <slope.hpp>
+
+#include <cmath>
+#include <functional>
+#include <memory>
+#include <numbers>
+
+namespace drape::scenes {
+
+enum class RestScene { Ridge, Corner, Rod, Ball };
+inline const char* name(RestScene s) {
+  switch (s) {
+    case RestScene::Ridge: return "ridge";
+    case RestScene::Corner: return "cube corner";
+    case RestScene::Rod: return "3 mm rod";
+    case RestScene::Ball: return "ball";
+  }
+  return "";
+}
+
+using Distance = std::function<double(const Eigen::Vector3d&)>;
+
+/// The RMS speed of the vertices within `reach` of the solid whose distance field is `distance` (0 if none is).
+template <class S> double rmsSpeedNear(const Solver<S>& solver, const Distance& distance, double reach) {
+  double sum = 0;
+  int count = 0;
+  for (Index i = 0; i < solver.vertexCount(); ++i)
+    if (distance(solver.position(i)) <= reach) sum += solver.velocity(i).squaredNorm(), ++count;
+  return count > 0 ? std::sqrt(sum / count) : 0.0;
+}
+/// The RMS speed of all vertices.
+template <class S> double rmsSpeed(const Solver<S>& solver) {
+  return rmsSpeedNear(solver, [](const Eigen::Vector3d&) { return 0.0; }, 0.0);
+}
+
+/// The solid's distance field, in double, at the world origin.
+template <class Shape> Distance fieldOf(const Solid<Shape>& solid) {
+  const Sdf<Shape, double> sdf = detail::compileSdf<double>(solid.shape, solid.pose, Eigen::Vector3d::Zero());
+  return [sdf](const Eigen::Vector3d& x) {
+    Eigen::Vector3d n;
+    return sdf(x, n);
+  };
+}
+
+/// The scene's cloth and solid in a solver with the given method and substeps (the rest of Settings at its
+/// defaults), and in `distance` the solid's field.
+template <class S> Solver<S> makeRestScene(RestScene scene, CollisionMethod method, int substeps, Distance& distance) {
+  constexpr double kFriction = 0.5;
+  if (scene == RestScene::Ridge) {  // the slope sample's ridge: inclined_plane --ridge --nx 40 --ny 40
+    SlopeConfig c;
+    c.ridge = true;
+    c.friction = kFriction;
+    c.nx = c.ny = 40;
+    c.subSteps = substeps;
+    c.method = method;
+    distance = fieldOf(slopeParts<S>(c).ridge);
+    return makeSlope<S>(c);
+  }
+  Settings settings;
+  settings.collisionMethod = method;
+  settings.subStepCount = substeps;
+  settings.continuousContact = scene == RestScene::Rod;  // at 2 substeps the rod is tunnelled without it
+  SheetDesc sheet;
+  sheet.nx = sheet.ny = 40;
+  sheet.spacing = 0.02;
+  // Off-centre by part of a cell, so no vertex sits exactly on the top of the solid.
+  sheet.placement.position = {0.01, -0.02, scene == RestScene::Ball ? 0.21 : scene == RestScene::Rod ? 0.1 : 0.0};
+  Solver<S> solver(std::make_shared<const ClothAsset<S>>(ClothAsset<S>::sheet(sheet)), settings);
+  if (scene == RestScene::Corner) {  // a 0.4 m cube, the diagonal through one corner vertical, that corner 1 cm below
+    Solid<Box> cube;
+    cube.shape.halfExtents = {0.2, 0.2, 0.2};
+    cube.pose.rotation = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d(1, 1, 1), Eigen::Vector3d::UnitZ());
+    cube.pose.position = {0, 0, -0.2 * std::numbers::sqrt3 - 0.01};
+    cube.staticFriction = cube.dynamicFriction = kFriction;
+    solver.addSolid(cube);
+    distance = fieldOf(cube);
+  } else if (scene == RestScene::Rod) {  // along x at height 0
+    Solid<Capsule> rod;
+    rod.shape.radius = 0.003;
+    rod.shape.halfHeight = 1.0;
+    rod.pose.rotation = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), Eigen::Vector3d::UnitX());
+    rod.staticFriction = rod.dynamicFriction = kFriction;
+    solver.addSolid(rod);
+    distance = fieldOf(rod);
+  } else {
+    Solid<Sphere> ball;
+    ball.shape.radius = 0.2;
+    ball.staticFriction = ball.dynamicFriction = kFriction;
+    solver.addSolid(ball);
+    distance = fieldOf(ball);
+  }
+  return solver;
+}
+
+}  // namespace drape::scenes
