@@ -6,7 +6,7 @@
 // mu 0.5, continuous contact on) and a 0.2 m ball (mu 0.5), each for every collision method, float and double.
 // A cloth has no damping of its own: where it hangs free (the skirt over the ball) it swings down only through the
 // solver's dissipation, so that part of a reading is not trembling.
-// Run: build/bench/rest_drift [seconds, default 20] [substep counts..., default 2]
+// Run: build/bench/rest_drift [--iterations N, default 1] [seconds, default 20] [substep counts..., default 2]
 #include <drape/drape.hpp>
 
 #include <rest_scenes.hpp>
@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
+#include <string>
 #include <vector>
 
 namespace {
@@ -31,9 +32,12 @@ struct Reading {
   double lowest = 0;
 };
 
-template <class S> Reading run(RestScene scene, CollisionMethod method, int substeps, double seconds) {
+template <class S> Reading run(RestScene scene, CollisionMethod method, int substeps, int iterations, double seconds) {
   scenes::Distance distance;
   Solver<S> solver = scenes::makeRestScene<S>(scene, method, substeps, distance);
+  Settings settings = solver.settings();
+  settings.iterationCount = iterations;
+  solver.setSettings(settings);
   const int frames = int(seconds * 60 + 0.5);
   const int marks[3] = {frames / 4, frames / 2, frames};
   Reading r;
@@ -51,9 +55,15 @@ template <class S> Reading run(RestScene scene, CollisionMethod method, int subs
 }  // namespace
 
 int main(int argc, char** argv) {
-  const double seconds = argc > 1 ? std::atof(argv[1]) : 20.0;
+  int iterations = 1, first = 1;
+  if (argc > 2 && std::string(argv[1]) == "--iterations") iterations = std::atoi(argv[2]), first = 3;
+  if (iterations < 1 || iterations > 1000) {
+    std::fprintf(stderr, "rest_drift: --iterations must be in [1, 1000]\n");
+    return 2;
+  }
+  const double seconds = argc > first ? std::atof(argv[first]) : 20.0;
   std::vector<int> substeps;
-  for (int a = 2; a < argc; ++a) substeps.push_back(std::atoi(argv[a]));
+  for (int a = first + 1; a < argc; ++a) substeps.push_back(std::atoi(argv[a]));
   if (substeps.empty()) substeps = {2};
   if (!(seconds >= 0.1) || seconds > 600) {
     std::fprintf(stderr, "rest_drift: seconds must be in [0.1, 600]\n");
@@ -64,8 +74,9 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "rest_drift: substep counts must be in [1, 1000]\n");
       return 2;
     }
-  std::printf("RMS speed of all vertices (m/s) after %g, %g and %g s; the lowest vertex at the end (m).\n\n",
-              seconds / 4, seconds / 2, seconds);
+  std::printf("%d solver iteration(s) per substep. RMS speed of all vertices (m/s) after %g, %g and %g s; the "
+              "lowest vertex at the end (m).\n\n",
+              iterations, seconds / 4, seconds / 2, seconds);
   std::printf("| scene | substeps | method | scalar | RMS at %g s | at %g s | at %g s | within 2 cm at %g s | lowest |\n",
               seconds / 4, seconds / 2, seconds, seconds);
   std::printf("|---|---:|---|---|---:|---:|---:|---:|---:|\n");
@@ -73,7 +84,8 @@ int main(int argc, char** argv) {
     for (int n : substeps)
       for (CollisionMethod m : {CollisionMethod::Faces, CollisionMethod::InSolve, CollisionMethod::Vertices})
         for (bool isFloat : {true, false}) {
-          const Reading r = isFloat ? run<float>(scene, m, n, seconds) : run<double>(scene, m, n, seconds);
+          const Reading r =
+              isFloat ? run<float>(scene, m, n, iterations, seconds) : run<double>(scene, m, n, iterations, seconds);
           std::printf("| %s | %d | %s | %s | %.1e | %.1e | %.1e | %.1e | %.3f |\n", scenes::name(scene), n, toString(m),
                       isFloat ? "float" : "double", r.rms[0], r.rms[1], r.rms[2], r.nearRms, r.lowest);
           std::fflush(stdout);

@@ -539,6 +539,50 @@ bool sweepFace(vec3 a0, vec3 a1, vec3 a2, vec3 b0, vec3 b1, vec3 b2, out vec3 qb
   return false;
 }
 
+// The direction a face contact pushes along, and how far (featureAlignedPush in
+// include/drape/collision/response.hpp): at a sharp feature, a deepest point inside the face goes along the face's
+// normal, one on an edge across that edge; a gradient already within the bounds is kept.
+float featureAlignedPush(vec3 x0, vec3 x1, vec3 x2, float depth, vec3 qb, vec3 qp, inout vec3 qn) {
+  int onEdge = 0, zero = -1;
+  for (int k = 0; k < 3; ++k)
+    if (qb[k] <= DRAPE_FEATURE_BARYCENTRIC) ++onEdge, zero = k;
+  vec3 u;
+  if (onEdge == 0) {
+    precise vec3 m = cross(x1 - x0, x2 - x0);
+    const float len = length3(m);
+    if (!(len > 0.0)) return depth;
+    u = m / len;
+    if (dot3(u, qn) < 0.0) u = -u;
+    if (dot3(u, qn) >= DRAPE_FEATURE_INTERIOR_COS) return depth;
+  } else if (onEdge == 1) {
+    const vec3 corners[3] = vec3[3](x0, x1, x2);
+    precise vec3 e = corners[(zero + 2) % 3] - corners[(zero + 1) % 3];
+    const float len = length3(e);
+    if (!(len > 0.0)) return depth;
+    e /= len;
+    const float along = dot3(qn, e);
+    if (abs(along) <= DRAPE_FEATURE_EDGE_SINE) return depth;
+    precise vec3 w = qn - along * e;
+    const float across = length3(w);
+    if (!(across > DRAPE_FEATURE_MIN_RATE)) return depth;
+    u = w / across;
+  } else {
+    return depth;
+  }
+  const float rate = dot3(u, qn);
+  if (!(rate > DRAPE_FEATURE_MIN_RATE)) return depth;
+  precise float s = depth / rate;
+  for (int it = 0; it < DRAPE_FEATURE_NEWTON_STEPS; ++it) {
+    vec3 g;
+    const float phi = sdf(qp + s * u, g);
+    const float grows = dot3(g, u);
+    if (!(grows > DRAPE_FEATURE_MIN_RATE)) break;
+    s += (thickness - phi) / grows;
+  }
+  qn = u;
+  return max(s, 0.0);
+}
+
 void main() {
   if (gl_GlobalInvocationID.x >= count) return;
   const uvec4 t = faces[first + gl_GlobalInvocationID.x];
@@ -599,7 +643,7 @@ void main() {
   precise const vec3 wb = vec3(a.w * qb.x, b.w * qb.y, c.w * qb.z);
   precise const float denom = dot3(wb, qb);
   if (denom <= 0.0) return;
-  precise const float depth = thickness - qphi;
+  precise const float depth = featureAlignedPush(x0, x1, x2, thickness - qphi, qb, qp, qn);
   precise const vec3 placed = qp + depth * qn;  // where the moves carry the deepest point (a body's push acts there)
   for (int k = 0; k < 3; ++k) {
     if (wb[k] <= 0.0) continue;

@@ -43,6 +43,10 @@ TEST_CASE("every shared constant reaches the shaders as the float the CPU kernel
                {"DRAPE_FLAT_SINE2", c::kFlatSine2},
                {"DRAPE_MIN_DESCENT_STEP", c::kMinDescentStep},
                {"DRAPE_GRID_LIPSCHITZ", c::kGridLipschitz},
+               {"DRAPE_FEATURE_BARYCENTRIC", c::kFeatureBarycentric},
+               {"DRAPE_FEATURE_INTERIOR_COS", c::kFeatureInteriorCos},
+               {"DRAPE_FEATURE_EDGE_SINE", c::kFeatureEdgeSine},
+               {"DRAPE_FEATURE_MIN_RATE", c::kFeatureMinRate},
                {"DRAPE_PINCH_RATE", c::kPinchRate},
                {"DRAPE_PINCH_OPPOSING_COS", c::kPinchOpposingCos},
                {"DRAPE_SPLIT_GRAM_MIN", c::kSplitGramMin},
@@ -62,4 +66,5 @@ TEST_CASE("every shared constant reaches the shaders as the float the CPU kernel
   CHECK(defined(p, "DRAPE_GRID_SEARCH_BUDGET") == std::to_string(c::kGridSearchBudget));
   CHECK(defined(p, "DRAPE_SWEEP_STEPS") == std::to_string(c::kSweepSteps));
   CHECK(defined(p, "DRAPE_FACE_SWEEP_STEPS") == std::to_string(c::kFaceSweepSteps));
+  CHECK(defined(p, "DRAPE_FEATURE_NEWTON_STEPS") == std::to_string(c::kFeatureNewtonSteps));
 }

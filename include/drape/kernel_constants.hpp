@@ -43,6 +43,19 @@ inline constexpr int kGridSearchBudget = 512;
 /// box distance's 1; rounded up past the nodes' float rounding.
 inline constexpr double kGridLipschitz = 2.75;
 
+// A face on a sharp feature of a solid (docs/design.md §3, "Feature normals").
+/// A face's deepest point with every barycentric coordinate above this is inside the face; with one at or below
+/// it, on the opposite edge.
+inline constexpr double kFeatureBarycentric = 1e-3;
+/// Inside the face, a field gradient within this cosine of the face's normal is kept.
+inline constexpr double kFeatureInteriorCos = 0.99;
+/// On an edge, a field gradient whose component along the edge is below this is kept.
+inline constexpr double kFeatureEdgeSine = 0.05;
+/// Newton steps that carry the deepest point to the thickness along the new direction.
+inline constexpr int kFeatureNewtonSteps = 2;
+/// The new direction is used, and a Newton step taken, only where the field grows at least this fast along it.
+inline constexpr double kFeatureMinRate = 0.05;
+
 // Continuous contact (docs/design.md §18).
 /// A vertex whose path in a substep, relative to a solid, is shorter than this share of the thickness is left to
 /// the discrete passes: starting outside the thickness it cannot reach the solid's far side.

@@ -223,6 +223,62 @@ DRAPE_ALWAYS_INLINE void keepTurnAbout(const Sdf<Shape, S>& sdf, const SolidMoti
   v += (std::min(d0.norm() / r1, S(1)) - S(1)) * across;
 }
 
+/// The direction a face contact pushes along, and how far (docs/design.md §3, "Feature normals"). At a sharp
+/// feature of a solid (a box's edge or corner) the field's gradient at the face's deepest point, inside the
+/// solid, is the normal of whichever of the feature's sides is nearer: it flips between them from substep to
+/// substep and throws the face sideways off the feature, so a cloth over a ridge never rests. A rigid contact
+/// of a solid's corner or edge on a flat face takes the face's normal; so does this one. A deepest point inside
+/// the face is pushed along the face's normal, one on an edge of the face across that edge (the gradient
+/// without its part along the edge); one at a corner of the face keeps the gradient. On a smooth field the
+/// deepest point already has its gradient along the face's normal (inside) or across the edge (on it), so
+/// nothing changes there: only a gradient further off than kFeatureInteriorCos or kFeatureEdgeSine is replaced.
+/// The push then carries the deepest point to the thickness along the new direction, by Newton steps on
+/// phi(point + s u) = thickness from the linear estimate. Returns the push's length (`depth` if unchanged), and
+/// sets q.normal to its direction.
+template <class Shape, Scalar S>
+S featureAlignedPush(const Sdf<Shape, S>& sdf, const Vec3<S>& x0, const Vec3<S>& x1, const Vec3<S>& x2,
+                     S thickness, S depth, FaceQuery<S>& q, int& evaluations) {
+  int onEdge = 0, zero = -1;
+  for (int k = 0; k < 3; ++k)
+    if (q.barycentric[k] <= S(constants::kFeatureBarycentric)) ++onEdge, zero = k;
+  Vec3<S> u;
+  if (onEdge == 0) {
+    u = (x1 - x0).cross(x2 - x0);
+    const S length = u.norm();
+    if (!(length > S(0))) return depth;
+    u /= length;
+    if (u.dot(q.normal) < S(0)) u = -u;
+    if (u.dot(q.normal) >= S(constants::kFeatureInteriorCos)) return depth;
+  } else if (onEdge == 1) {
+    const Vec3<S>* corners[3] = {&x0, &x1, &x2};
+    Vec3<S> e = *corners[(zero + 2) % 3] - *corners[(zero + 1) % 3];
+    const S length = e.norm();
+    if (!(length > S(0))) return depth;
+    e /= length;
+    const S along = q.normal.dot(e);
+    if (std::abs(along) <= S(constants::kFeatureEdgeSine)) return depth;
+    u = q.normal - along * e;
+    const S across = u.norm();
+    if (!(across > S(constants::kFeatureMinRate))) return depth;
+    u /= across;
+  } else {
+    return depth;
+  }
+  const S rate = u.dot(q.normal);
+  if (!(rate > S(constants::kFeatureMinRate))) return depth;
+  S s = depth / rate;
+  for (int it = 0; it < constants::kFeatureNewtonSteps; ++it) {
+    Vec3<S> g;
+    const S phi = sdf(Vec3<S>(q.point + s * u), g);
+    ++evaluations;
+    const S grows = g.dot(u);
+    if (!(grows > S(constants::kFeatureMinRate))) break;
+    s += (thickness - phi) / grows;
+  }
+  q.normal = u;
+  return std::max(s, S(0));
+}
+
 /// Which vertices (or faces) a pass visits: all of them, or a list from the broad phase. Both are inlined, so
 /// the full pass pays nothing for the choice.
 struct AllItems {
@@ -407,7 +463,9 @@ S projectFaceContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, int p
     const S denom = wb.dot(q.barycentric);
     if (denom <= S(0)) continue;
     ++stats.faceContacts;
-    const S depth = thickness - q.phi;
+    int extra = 0;
+    const S depth = featureAlignedPush(solid.sdf, x[t[0]], x[t[1]], x[t[2]], thickness, thickness - q.phi, q, extra);
+    stats.sdfEvaluations += extra;
     const Vec3<S> placed = q.point + depth * q.normal;  // the moves below carry the deepest point there
     for (int k = 0; k < 3; ++k) {
       if (wb[k] <= S(0)) continue;
