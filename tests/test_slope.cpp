@@ -6,6 +6,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <numbers>
@@ -213,25 +214,33 @@ TEMPLATE_TEST_CASE("a cloth started partly inside the slope: faces settles, in-s
   CHECK(inSolve.tremblingRms >= 100 * faces.tremblingRms);
 }
 
+/// The RMS speed of all vertices of a rest scene (scenes/rest_scenes.hpp) at 2 substeps and `iterations` solver
+/// passes, after `seconds`, with the faces method and with the in-solve one; printed as a [rest] line.
+template <class S> std::array<double, 2> restRms(drape::scenes::RestScene scene, int iterations, int seconds) {
+  std::array<double, 2> rms{};
+  const CollisionMethod methods[2] = {CollisionMethod::Faces, CollisionMethod::InSolve};
+  for (std::size_t k = 0; k < 2; ++k) {
+    drape::scenes::Distance distance;
+    auto solver = drape::scenes::makeRestScene<S>(scene, methods[k], 2, distance);
+    drape::Settings settings = solver.settings();
+    settings.iterationCount = iterations;
+    solver.setSettings(settings);
+    for (int f = 0; f < seconds * 60; ++f) solver.step(1.0 / 60.0);
+    rms[k] = drape::scenes::rmsSpeed(solver);
+  }
+  std::printf("[rest] %s, 2 substeps, %d iteration(s), after %d s (%s): RMS speed faces %.2e m/s, in-solve %.2e m/s\n",
+              drape::scenes::name(scene), iterations, seconds, sizeof(S) == 4 ? "float" : "double", rms[0], rms[1]);
+  return rms;
+}
+
 TEMPLATE_TEST_CASE("at 2 substeps a cloth hanging over a ball comes to rest", "[rest]", float, double) {
   // A 40x40 cloth (2 cm) dropped on a 0.2 m ball, mu 0.5, at 2 substeps (scenes/rest_scenes.hpp). It has no damping
   // of its own, so its free skirt swings down only through the solver's dissipation: after 20 s every vertex is
   // at 2.6e-4 m/s RMS, after 40 s at 3.9e-6 (float) and 1.5e-6 (double) with the faces method; the in-solve
-  // method at 2.1e-5 and 2.5e-4 (build/bench/rest_drift 40 2). The meter sees motion: on the ridge at 2 substeps the
-  // same RMS reads 3.2e-2 (docs/design.md, Known limits).
+  // method at 2.1e-5 and 2.5e-4 (build/bench/rest_drift 40 2). The meter sees motion: on the ridge at 2 substeps and
+  // 1 iteration the same RMS reads 2.0e-2 / 7.2e-3 (docs/design.md, Known limits).
   if (drape::test::kSanitized) return;  // 4800 substeps a run: the physics, not memory, is what this tests
-  using S = TestType;
-  using drape::scenes::RestScene;
-  double rms[2] = {0, 0};
-  const CollisionMethod methods[2] = {CollisionMethod::Faces, CollisionMethod::InSolve};
-  for (int k = 0; k < 2; ++k) {
-    drape::scenes::Distance distance;
-    auto solver = drape::scenes::makeRestScene<S>(RestScene::Ball, methods[k], 2, distance);
-    for (int f = 0; f < 40 * 60; ++f) solver.step(1.0 / 60.0);
-    rms[k] = drape::scenes::rmsSpeed(solver);
-  }
-  std::printf("[rest] ball, 2 substeps, after 40 s (%s): RMS speed faces %.2e m/s, in-solve %.2e m/s\n",
-              sizeof(S) == 4 ? "float" : "double", rms[0], rms[1]);
+  const auto rms = restRms<TestType>(drape::scenes::RestScene::Ball, 1, 40);
   INFO("RMS speed of all vertices after 40 s: faces " << rms[0] << " m/s, in-solve " << rms[1] << " m/s");
   CHECK(rms[0] <= 1e-4);
 }
@@ -243,21 +252,7 @@ TEMPLATE_TEST_CASE("at 2 substeps and 4 solver iterations a cloth on a ridge com
   // field's gradient as before, the same settings read 4.0e-2; with the feature push and 1 pass, 2.0e-2 / 7.2e-3.
   // The in-solve method, whose contacts are in every pass, rests here too (3.4e-6 / 6.8e-15).
   if (drape::test::kSanitized) return;  // 2400 substeps a run: the physics, not memory, is what this tests
-  using S = TestType;
-  using drape::scenes::RestScene;
-  double rms[2] = {0, 0};
-  const CollisionMethod methods[2] = {CollisionMethod::Faces, CollisionMethod::InSolve};
-  for (int k = 0; k < 2; ++k) {
-    drape::scenes::Distance distance;
-    auto solver = drape::scenes::makeRestScene<S>(RestScene::Ridge, methods[k], 2, distance);
-    drape::Settings settings = solver.settings();
-    settings.iterationCount = 4;
-    solver.setSettings(settings);
-    for (int f = 0; f < 20 * 60; ++f) solver.step(1.0 / 60.0);
-    rms[k] = drape::scenes::rmsSpeed(solver);
-  }
-  std::printf("[rest] ridge, 2 substeps, 4 iterations, after 20 s (%s): RMS speed faces %.2e m/s, in-solve %.2e m/s\n",
-              sizeof(S) == 4 ? "float" : "double", rms[0], rms[1]);
+  const auto rms = restRms<TestType>(drape::scenes::RestScene::Ridge, 4, 20);
   INFO("RMS speed of all vertices after 20 s: faces " << rms[0] << " m/s, in-solve " << rms[1] << " m/s");
   CHECK(rms[0] <= 1e-4);
 }
