@@ -65,8 +65,11 @@ struct SlopeResult {
   static constexpr int kMinFitFrames = 3;
   /// A cloth whose edges end more than twice their rest length apart no longer holds together: the run diverged.
   static constexpr double kDivergedStrain = 1.0;
+  /// A vertex further than this inside the solid (ten of the default thicknesses) went through it.
+  static constexpr double kThroughDepth = 0.05;  ///< m
   bool fitted() const { return fittedFrames >= kMinFitFrames; }
-  bool diverged() const { return !finite || maxStrain > kDivergedStrain; }
+  bool fellThrough() const { return maxPenetration > kThroughDepth; }
+  bool diverged() const { return !finite || maxStrain > kDivergedStrain || fellThrough(); }
 };
 
 inline Eigen::Quaterniond slopeRotation(double angleDeg) {

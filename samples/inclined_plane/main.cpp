@@ -209,10 +209,12 @@ int main(int argc, char** argv) {
     // Exit codes: 3, the run diverged and its figures mean nothing; 4, too short to fit the acceleration.
     if (r.diverged()) {
       char why[96];
-      if (r.finite)
+      if (!r.finite)
+        std::snprintf(why, sizeof why, "positions are not finite");
+      else if (r.maxStrain > drape::scenes::SlopeResult::kDivergedStrain)
         std::snprintf(why, sizeof why, "edges up to %.3g times their rest length", 1 + r.maxStrain);
       else
-        std::snprintf(why, sizeof why, "positions are not finite");
+        std::snprintf(why, sizeof why, "a vertex %.3g m inside the solid: the cloth went through it", r.maxPenetration);
       std::fprintf(stderr,
                    "inclined_plane: the run diverged (%s): its figures are meaningless; try more substeps or a "
                    "shorter --dt\n",
