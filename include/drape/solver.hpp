@@ -139,27 +139,9 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     }
   }
 
-  void subStep(double hd) {
-    prepareSolids(hd);
-    if (massesChanged_) {
-      gatherLaneMasses();
-      massesChanged_ = false;
-    }
-    passes_.resetStats();
-    spinExternal_ = {};  // this substep's own; one an exception cut short leaves nothing behind
-    const int threads = settings_.threadCount == 0 ? hardwareThreads() : settings_.threadCount;
-    // One team for the whole substep: its loops share the work (teamFor), so the team is made once. One
-    // thread opens no team: outside one the directives cost nothing, while a team of one still pays libgomp's
-    // barrier (a futex wake-up each) after every loop.
-    if (threads > 1) {
-      DRAPE_OMP(parallel num_threads(threads))
-      subStepBody(S(hd));
-    } else {
-      subStepBody(S(hd));
-    }
-    // An exception may not leave a team (the program would terminate): one thrown inside it is kept until here.
-    if (teamError_) std::rethrow_exception(std::exchange(teamError_, nullptr));
-  }
+  // Defined below the class, not inline: where the built-in solvers are compiled once (DRAPE_EXTERN_SOLVERS),
+  // the other files then do not compile the substep and every kernel it reaches.
+  void subStep(double hd);
 
   /// One substep's stages (docs/design.md §1), run by every thread of the team.
   void subStepBody(const S h) {
@@ -501,6 +483,28 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
   SpinSums spinExternal_;               ///< the external pushes inside this substep's solve
   Eigen::Vector3d spinOmega_ = Eigen::Vector3d::Zero(), spinCentre_ = Eigen::Vector3d::Zero();
 };
+
+template <Scalar S, class... Shapes> void BasicSolver<S, Shapes...>::subStep(double hd) {
+  prepareSolids(hd);
+  if (massesChanged_) {
+    gatherLaneMasses();
+    massesChanged_ = false;
+  }
+  passes_.resetStats();
+  spinExternal_ = {};  // this substep's own; one an exception cut short leaves nothing behind
+  const int threads = settings_.threadCount == 0 ? hardwareThreads() : settings_.threadCount;
+  // One team for the whole substep: its loops share the work (teamFor), so the team is made once. One
+  // thread opens no team: outside one the directives cost nothing, while a team of one still pays libgomp's
+  // barrier (a futex wake-up each) after every loop.
+  if (threads > 1) {
+    DRAPE_OMP(parallel num_threads(threads))
+    subStepBody(S(hd));
+  } else {
+    subStepBody(S(hd));
+  }
+  // An exception may not leave a team (the program would terminate): one thrown inside it is kept until here.
+  if (teamError_) std::rethrow_exception(std::exchange(teamError_, nullptr));
+}
 
 /// The solver with every built-in shape: the analytic ones, the rigid bodies' cylinders and convex hulls, and
 /// grid distance fields from meshes.

@@ -1,0 +1,5 @@
+// The built-in solvers, compiled once for every test, sample and bench program (each defines
+// DRAPE_EXTERN_SOLVERS; see drape/solver.hpp): Solver<float> here, Solver<double> beside it, so the two build
+// in parallel.
+#define DRAPE_SOLVER_INSTANCES_SCALAR float
+#include <drape/solver_instances.hpp>
