@@ -2,6 +2,7 @@
 // culling: exact per face, and invisible at the solver level.
 
 #include "face_search_helpers.hpp"
+#include "sanitizer.hpp"
 
 #include <drape/drape.hpp>
 
@@ -596,10 +597,12 @@ template <class S> std::array<Vec3<S>, 3> faceOverFeature(std::mt19937& rng) {
 
 }  // namespace
 
-TEMPLATE_TEST_CASE("a face on a box's corner or edge is pushed clear along its own normal, a face on a ball as before",
-                   "[pgd][feature]", float, double) {
+TEMPLATE_TEST_CASE("a face on a box's corner or edge is pushed clear along its own normal", "[pgd][feature]", float,
+                   double) {
   using S = TestType;
   const S thickness = S(0.005);
+  // Fewer under the sanitizers, where each brute force costs about 20 times as much (120 meet every check).
+  const int trials = drape::test::kSanitized ? 120 : 400;
   for (const bool corner : {true, false}) {
     // The feature at the origin: the cube's top corner, or the top edge of a box along x.
     drape::Box box;
@@ -612,7 +615,7 @@ TEMPLATE_TEST_CASE("a face on a box's corner or edge is pushed clear along its o
     std::mt19937 rng(corner ? 11 : 12);
     int cases = 0, inside = 0, onEdge = 0;
     S worstAligned = std::numeric_limits<S>::infinity(), worstGradient = worstAligned;
-    for (int trial = 0; trial < 400; ++trial) {
+    for (int trial = 0; trial < trials; ++trial) {
       const auto x = faceOverFeature<S>(rng);
       drape::FaceQuery<S> q;
       if (!drape::queryFace<true>(sdf, x[0], x[1], x[2], thickness, 12, q) || q.phi >= thickness) continue;
@@ -634,7 +637,7 @@ TEMPLATE_TEST_CASE("a face on a box's corner or edge is pushed clear along its o
     // -0.03 mm (the corner still inside the solid) along the gradient; over the edge 1.9-2.0 mm against 0.64 /
     // -0.28 mm. Across an edge of the face the push is not the shortest one (that would be across both the
     // face's edge and the box's), so it clears part of the thickness only.
-    CHECK(cases >= 200);
+    CHECK(cases >= trials / 2);
     if (corner) {
       CHECK(worstAligned >= S(0.95) * thickness);
       CHECK(worstGradient < S(0.5) * thickness);
