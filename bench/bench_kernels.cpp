@@ -64,11 +64,11 @@ template <class S> void integrate(benchmark::State& state) {
   const std::vector<S> w(n, S(10));
   const drape::Vec3<S> gh(0, 0, S(-9.81 / 300));
   const S h = S(1.0 / 300);
-  drape::predictPositions<false>(0, n, x.data(), v.data(), w.data(), gh, h, x0.data(), xp.data(), xw.data());
+  drape::predictPositions<false, false>(0, n, x.data(), v.data(), w.data(), gh, h, x0.data(), xp.data(), xw.data());
   const bool predict = state.range(0) == 0;
   for (auto _ : state) {
     if (predict)
-      drape::predictPositions<false>(0, n, x.data(), v.data(), w.data(), gh, h, x0.data(), xp.data(), xw.data());
+      drape::predictPositions<false, false>(0, n, x.data(), v.data(), w.data(), gh, h, x0.data(), xp.data(), xw.data());
     else
       drape::updateVelocities<false, false>(0, n, xw.data(), xp.data(), x.data(), v.data(), S(1) / h);
     benchmark::ClobberMemory();

@@ -4,9 +4,11 @@
 // The scenes are the ones where drape's contacts are hardest to bring to rest: a ridge (the slope sample's box
 // turned 45 degrees, an edge on top, mu 0.5), a cube standing on a corner (mu 0.5), a 3 mm rod (a capsule,
 // mu 0.5, continuous contact on) and a 0.2 m ball (mu 0.5), each for every collision method, float and double.
-// A cloth has no damping of its own: where it hangs free (the skirt over the ball) it swings down only through the
-// solver's dissipation, so that part of a reading is not trembling.
-// Run: build/bench/rest_drift [--iterations N, default 1] [seconds, default 20] [substep counts..., default 2]
+// Without air damping (Settings::airDamping, default 0) a cloth loses no motion of its own: where it hangs free (the
+// skirt over the ball, the halves over the rod) it swings down only through the solver's dissipation, so that
+// part of a reading is not trembling.
+// Run: build/bench/rest_drift [--iterations N, default 1] [--air-damping C in 1/s, default 0] [seconds, default 20]
+//      [substep counts..., default 2]
 #include <drape/drape.hpp>
 
 #include <rest_scenes.hpp>
@@ -32,11 +34,14 @@ struct Reading {
   double lowest = 0;
 };
 
-template <class S> Reading run(RestScene scene, CollisionMethod method, int substeps, int iterations, double seconds) {
+template <class S>
+Reading run(RestScene scene, CollisionMethod method, int substeps, int iterations, double airDamping,
+            double seconds) {
   scenes::Distance distance;
   Solver<S> solver = scenes::makeRestScene<S>(scene, method, substeps, distance);
   Settings settings = solver.settings();
   settings.iterationCount = iterations;
+  settings.airDamping = airDamping;
   solver.setSettings(settings);
   const int frames = int(seconds * 60 + 0.5);
   const int marks[3] = {frames / 4, frames / 2, frames};
@@ -56,9 +61,24 @@ template <class S> Reading run(RestScene scene, CollisionMethod method, int subs
 
 int main(int argc, char** argv) {
   int iterations = 1, first = 1;
-  if (argc > 2 && std::string(argv[1]) == "--iterations") iterations = std::atoi(argv[2]), first = 3;
+  double airDamping = 0;
+  for (; first + 1 < argc && std::string(argv[first]).starts_with("--"); first += 2) {
+    const std::string option = argv[first];
+    if (option == "--iterations") {
+      iterations = std::atoi(argv[first + 1]);
+    } else if (option == "--air-damping") {
+      airDamping = std::atof(argv[first + 1]);
+    } else {
+      std::fprintf(stderr, "rest_drift: unknown option %s (--iterations, --air-damping)\n", option.c_str());
+      return 2;
+    }
+  }
   if (iterations < 1 || iterations > 1000) {
     std::fprintf(stderr, "rest_drift: --iterations must be in [1, 1000]\n");
+    return 2;
+  }
+  if (!(airDamping >= 0) || airDamping > 1e4) {
+    std::fprintf(stderr, "rest_drift: --air-damping must be in [0, 1e4] 1/s\n");
     return 2;
   }
   const double seconds = argc > first ? std::atof(argv[first]) : 20.0;
@@ -74,9 +94,9 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "rest_drift: substep counts must be in [1, 1000]\n");
       return 2;
     }
-  std::printf("%d solver iteration(s) per substep. RMS speed of all vertices (m/s) after %g, %g and %g s; the "
-              "lowest vertex at the end (m).\n\n",
-              iterations, seconds / 4, seconds / 2, seconds);
+  std::printf("%d solver iteration(s) per substep, air damping %g/s. RMS speed of all vertices (m/s) after %g, %g "
+              "and %g s; the lowest vertex at the end (m).\n\n",
+              iterations, airDamping, seconds / 4, seconds / 2, seconds);
   std::printf("| scene | substeps | method | scalar | RMS at %g s | at %g s | at %g s | within 2 cm at %g s | lowest |\n",
               seconds / 4, seconds / 2, seconds, seconds);
   std::printf("|---|---:|---|---|---:|---:|---:|---:|---:|\n");
@@ -85,7 +105,8 @@ int main(int argc, char** argv) {
       for (CollisionMethod m : {CollisionMethod::Faces, CollisionMethod::InSolve, CollisionMethod::Vertices})
         for (bool isFloat : {true, false}) {
           const Reading r =
-              isFloat ? run<float>(scene, m, n, iterations, seconds) : run<double>(scene, m, n, iterations, seconds);
+              isFloat ? run<float>(scene, m, n, iterations, airDamping, seconds)
+                      : run<double>(scene, m, n, iterations, airDamping, seconds);
           std::printf("| %s | %d | %s | %s | %.1e | %.1e | %.1e | %.1e | %.3f |\n", scenes::name(scene), n, toString(m),
                       isFloat ? "float" : "double", r.rms[0], r.rms[1], r.rms[2], r.nearRms, r.lowest);
           std::fflush(stdout);

@@ -147,7 +147,8 @@ bool sameSettings(const drape::Settings& a, const drape::Settings& b) {
          a.bendingCompliance == b.bendingCompliance && a.pinCompliance == b.pinCompliance &&
          a.collisionMethod == b.collisionMethod && a.thickness == b.thickness &&
          a.normalDamping == b.normalDamping && a.pgdIterations == b.pgdIterations && a.culling == b.culling &&
-         a.propagationWeight == b.propagationWeight && a.propagationRings == b.propagationRings;
+         a.propagationWeight == b.propagationWeight && a.propagationRings == b.propagationRings &&
+         a.airDamping == b.airDamping;
 }
 
 /// A valid non-default Settings, so "unchanged" is not confused with "reset to defaults".
@@ -159,6 +160,7 @@ drape::Settings customSettings() {
   s.bendingCompliance = 2e-3;
   s.thickness = 0.004;
   s.normalDamping = 0.8;
+  s.airDamping = 0.5;
   s.pgdIterations = 6;
   s.propagationWeight = 0.25;
   s.propagationRings = 2;
@@ -200,6 +202,9 @@ std::vector<BadSettings> badSettingsList() {
       {"normalDamping 2", [](drape::Settings& s) { s.normalDamping = 2; }, "normalDamping"},
       {"normalDamping -0.1", [](drape::Settings& s) { s.normalDamping = -0.1; }, "normalDamping"},
       {"NaN normalDamping", [](drape::Settings& s) { s.normalDamping = kNaN; }, "normalDamping"},
+      {"airDamping -1", [](drape::Settings& s) { s.airDamping = -1; }, "airDamping"},
+      {"NaN airDamping", [](drape::Settings& s) { s.airDamping = kNaN; }, "airDamping"},
+      {"airDamping 2e4", [](drape::Settings& s) { s.airDamping = 2e4; }, "airDamping"},
       {"pgdIterations 0", [](drape::Settings& s) { s.pgdIterations = 0; }, "pgdIterations"},
       {"pgdIterations 1001", [](drape::Settings& s) { s.pgdIterations = 1001; }, "pgdIterations"},
       {"propagationWeight -1", [](drape::Settings& s) { s.propagationWeight = -1; }, "propagationWeight"},

@@ -87,6 +87,11 @@ struct Settings {
   CollisionMethod collisionMethod = CollisionMethod::Faces;
   double thickness = 0.005;    ///< m: contacts hold the cloth this far outside each solid
   double normalDamping = 1;    ///< fraction of the separating normal velocity a contact removes, in [0, 1]
+  /// 1/s: each free vertex's velocity decays as exp(-airDamping t), the loss to still air (and to the cloth's own
+  /// internal friction) that the constraints do not model. 0 keeps every motion: a skirt hanging from a ball at 2
+  /// substeps then still swings at 2.6e-4 m/s after 20 s, losing only what the solver dissipates (docs/design.md
+  /// §1). It damps sliding too: on a frictionless slope the cloth's speed tends to g sin(angle) / airDamping.
+  double airDamping = 0;
   int pgdIterations = 12;      ///< most SDF evaluations per face in the deepest-point search (>= 1); it
                                ///< stops earlier once certified, so this only caps curved faces
   bool culling = true;         ///< bounding-sphere culling of faces (exact: it never drops a contact)
@@ -144,6 +149,7 @@ struct Settings {
     require(std::isfinite(thickness) && thickness > 0 && thickness <= 1,
             "thickness must be in (0, 1] m (got " + detail::formatNumber(thickness) + ")");
     requireRange(normalDamping, 0, 1, "normalDamping");
+    requireRange(airDamping, 0, 1e4, "airDamping");
     require(pgdIterations >= 1 && pgdIterations <= 1000,
             "pgdIterations must be in [1, 1000] (got " + std::to_string(pgdIterations) + ")");
     requireRange(propagationWeight, 0, 1, "propagationWeight");

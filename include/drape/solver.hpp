@@ -184,9 +184,12 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     Vec4<S>* xw = packed_.data();
     const S* w = state_.invMass.data();
     const Index n = vertexCount();
-    withFlags([&](auto keepStart) {
-      teamFor(n, [&](Index b, Index e) { predictPositions<keepStart()>(b, e, x, v, w, gh, h, x0, xp, xw); });
-    }, hasFriction_ || coupled_ || sweep_ || keepSpin_);
+    const S keep = S(std::exp(-settings_.airDamping * double(h)));
+    withFlags([&](auto keepStart, auto damp) {
+      teamFor(n, [&](Index b, Index e) {
+        predictPositions<keepStart(), damp()>(b, e, x, v, w, gh, h, x0, xp, xw, keep);
+      });
+    }, hasFriction_ || coupled_ || sweep_ || keepSpin_, settings_.airDamping > 0);
   }
 
   /// 2. iterationCount passes over the constraints, set by set, then the pins; the in-solve method's contacts

@@ -12,6 +12,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <cmath>
 #include <cstring>
 #include <random>
 #include <vector>
@@ -95,16 +96,26 @@ TEST_CASE("an unknown backend name is rejected with the names that exist", "[gpu
   CHECK(drape::gpu::backendFromString("egl") == drape::gpu::Backend::Egl);
 }
 
-TEST_CASE("predict: the GPU kernel against predictPositions", "[gpu]") {
+TEST_CASE("predict: the GPU kernel against predictPositions, without and with air damping", "[gpu]") {
   drape::test::gpuContext().makeCurrent();
   const Index n = 1000;  // not a multiple of the workgroup
   const RandomVertices r(n, 7);
   const float h = 1.0f / 600.0f;
   const Vec3<float> gh = Vec3<float>(0.3f, -0.2f, -9.81f) * h;
+  const bool damped = GENERATE(false, true);
+  const float keep = damped ? float(std::exp(-2.0 * double(h))) : 1.0f;  // airDamping 2/s, as the solvers set it
+  INFO("keep " << keep);
 
   std::vector<Vec3<float>> v = r.v, xp(n);
   std::vector<Vec4<float>> xw(n);
-  drape::predictPositions<false, float>(0, n, r.x.data(), v.data(), r.w.data(), gh, h, nullptr, xp.data(), xw.data());
+  if (damped)
+    drape::predictPositions<false, true, float>(0, n, r.x.data(), v.data(), r.w.data(), gh, h, nullptr, xp.data(),
+                                                xw.data(), keep);
+  else
+    drape::predictPositions<false, false, float>(0, n, r.x.data(), v.data(), r.w.data(), gh, h, nullptr, xp.data(),
+                                                 xw.data());
+  // Damping changes every free velocity by more than the tolerance below, so the comparison sees it.
+  if (damped) CHECK(drape::test::largestDifference(v, r.v) > 1e-4);
 
   drape::gpu::Buffer<Vertex> gx(toVertices(r.x, r.w)), gv(toVertices(r.v, {})), gp{std::vector<Vertex>(std::size_t(n))},
       gw{std::vector<Vertex>(std::size_t(n))};
@@ -116,6 +127,7 @@ TEST_CASE("predict: the GPU kernel against predictPositions", "[gpu]") {
   predict.set(layout::kCount, unsigned(n));
   predict.set(layout::kStep, h);
   predict.set(layout::kGravityStep, gh.x(), gh.y(), gh.z());
+  predict.set(layout::kKeepVelocity, keep);
   predict.dispatch(std::size_t(n));
 
   const auto packed = gw.read();

@@ -9,17 +9,22 @@
 namespace drape {
 
 /// Step 1 for vertices [begin, end): a free vertex (inverse mass w != 0) gains gh = h g of velocity and moves
-/// h v; a pinned one stays. The predicted position goes to xp (for the velocity update) and, as (p, 0), to the
-/// packed positions xw. The start positions x are not changed; with kKeepStart they are also copied to x0
-/// (for friction and the energy estimate, which read them after x is updated).
-template <bool kKeepStart, Scalar S>
+/// h v; a pinned one stays. With kDamp the velocity is then scaled by `keep` = exp(-airDamping h). The predicted
+/// position goes to xp (for the velocity update) and, as (p, 0), to the packed positions xw. The start positions
+/// x are not changed; with kKeepStart they are also copied to x0 (for friction and the energy estimate, which
+/// read them after x is updated).
+template <bool kKeepStart, bool kDamp, Scalar S>
 void predictPositions(Index begin, Index end, const Vec3<S>* x, Vec3<S>* v, const S* w, const Vec3<S>& gh, S h,
-                      Vec3<S>* x0, Vec3<S>* xp, Vec4<S>* xw) {
+                      Vec3<S>* x0, Vec3<S>* xp, Vec4<S>* xw, [[maybe_unused]] S keep = S(1)) {
   for (Index i = begin; i < end; ++i) {
     if constexpr (kKeepStart) x0[i] = x[i];
     Vec3<S> p = x[i];
     if (w[i] != S(0)) {
-      v[i] += gh;
+      if constexpr (kDamp) {
+        v[i] = keep * (v[i] + gh);
+      } else {
+        v[i] += gh;
+      }
       p += h * v[i];
     }
     xp[i] = p;

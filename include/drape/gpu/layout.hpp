@@ -78,6 +78,7 @@ enum Uniform : int {
   kSweep = 27,          ///< vec2: continuous contact's substep h (s) and gate squared (m^2); 0 is off
   kBoxLow = 28,         ///< vec3: the solid's bounding box (the cloth's local frame), outside which phi is at least
   kBoxHigh = 29,        ///<   the distance to the box (placeBounds); +-FLT_MAX for an unbounded solid
+  kKeepVelocity = 30,   ///< float: the share of its velocity a free vertex keeps in a substep, exp(-airDamping h)
   kShape = 32,  ///< vec4[5] (locations 32-36): the solid's field, packed by packShape (gpu/shapes.hpp)
 };
 
@@ -227,6 +228,7 @@ inline std::string preamble(const std::string& defines = {}) {
   s += define("DRAPE_U_RING", kRing);
   s += define("DRAPE_U_WEIGHT", kWeight);
   s += define("DRAPE_U_KEEP_START", kKeepStart);
+  s += define("DRAPE_U_KEEP_VELOCITY", kKeepVelocity);
   s += define("DRAPE_B_REDUCTION", kReduction);
   s += define("DRAPE_U_SHIFT", kShift);
   s += define("DRAPE_B_FACES", kFaces);
