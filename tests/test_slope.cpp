@@ -216,7 +216,7 @@ TEMPLATE_TEST_CASE("a cloth started partly inside the slope: faces settles, in-s
 
 /// The RMS speed of all vertices of a rest scene (scenes/rest_scenes.hpp) at 2 substeps and `iterations` solver
 /// passes, after `seconds`, with the faces method and with the in-solve one; printed as a [rest] line.
-/// With `airDamping` (1/s) set, and the in-solve method replaced by the faces method without air damping.
+/// With `airDamping` (1/s) above 0, the first run has it and the second is the faces method without it.
 template <class S>
 std::array<double, 2> restRms(drape::scenes::RestScene scene, int iterations, int seconds, double airDamping = 0) {
   std::array<double, 2> rms{};
