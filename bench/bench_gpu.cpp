@@ -156,12 +156,12 @@ void BM_VertexKernelCpu(benchmark::State& state) {
   std::vector<drape::Vec4<float>> xw(static_cast<std::size_t>(n));
   const bool predict = state.range(0) == 0;
   const drape::Vec3<float> gh(0, 0, -9.81f / 600);
-  drape::predictPositions<true, false>(0, n, s.x.data(), s.v.data(), s.invMass.data(), gh, 1.0f / 600, x0.data(), xp.data(),
-                                xw.data());
+  drape::predictPositions<true, false>(0, n, s.x.data(), s.v.data(), s.invMass.data(), gh, 1.0f / 600, x0.data(),
+                                       xp.data(), xw.data());
   for (auto _ : state) {
     if (predict)
       drape::predictPositions<true, false>(0, n, s.x.data(), s.v.data(), s.invMass.data(), gh, 1.0f / 600, x0.data(),
-                                    xp.data(), xw.data());
+                                           xp.data(), xw.data());
     else
       drape::updateVelocities<false, false>(0, n, xw.data(), xp.data(), s.x.data(), s.v.data(), 600.0f);
     benchmark::ClobberMemory();

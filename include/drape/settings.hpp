@@ -127,6 +127,10 @@ struct Settings {
   /// result is bit-identical for every count. Without OpenMP at compile time every count runs on one thread.
   int threadCount = 1;
 
+  /// The share of its velocity a free vertex keeps over a substep of h seconds, exp(-airDamping h): the one
+  /// factor both solvers' predictions apply.
+  double velocityKept(double h) const { return std::exp(-airDamping * h); }
+
   /// Throws drape::Error naming the first out-of-range field.
   void validate() const {
     using detail::require;

@@ -184,7 +184,7 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     Vec4<S>* xw = packed_.data();
     const S* w = state_.invMass.data();
     const Index n = vertexCount();
-    const S keep = S(std::exp(-settings_.airDamping * double(h)));
+    const S keep = S(settings_.velocityKept(double(h)));
     withFlags([&](auto keepStart, auto damp) {
       teamFor(n, [&](Index b, Index e) {
         predictPositions<keepStart(), damp()>(b, e, x, v, w, gh, h, x0, xp, xw, keep);

@@ -12,7 +12,6 @@
 
 #include <catch2/catch.hpp>
 
-#include <cmath>
 #include <cstring>
 #include <random>
 #include <vector>
@@ -103,7 +102,9 @@ TEST_CASE("predict: the GPU kernel against predictPositions, without and with ai
   const float h = 1.0f / 600.0f;
   const Vec3<float> gh = Vec3<float>(0.3f, -0.2f, -9.81f) * h;
   const bool damped = GENERATE(false, true);
-  const float keep = damped ? float(std::exp(-2.0 * double(h))) : 1.0f;  // airDamping 2/s, as the solvers set it
+  drape::Settings air;
+  air.airDamping = 2;
+  const float keep = damped ? float(air.velocityKept(double(h))) : 1.0f;  // as the solvers set it
   INFO("keep " << keep);
 
   std::vector<Vec3<float>> v = r.v, xp(n);

@@ -363,7 +363,7 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
     predict_.set(layout::kStep, h);
     predict_.set(layout::kGravityStep, gh.x(), gh.y(), gh.z());
     predict_.set(layout::kKeepStart, unsigned(friction_ || coupled_ || sweep_));
-    predict_.set(layout::kKeepVelocity, float(std::exp(-settings_.airDamping * double(h))));
+    predict_.set(layout::kKeepVelocity, float(settings_.velocityKept(double(h))));
     predict_.dispatch(n);
   }
 
