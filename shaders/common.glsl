@@ -151,10 +151,77 @@ bool applyPositionFriction(vec3 n, vec3 vc, float correction, vec2 mu, inout vec
 
 // The point nearest to y0 in {y : n_k . y >= b_k} for up to three half-spaces (the CPU twin: nearestInHalfSpaces
 // in include/drape/collision/response.hpp): the nearest feasible point among the projections onto every subset of
-// the planes, within kReach times the total violation (or minReach); else the least-squares compromise by
-// Jacobi steps from `fallback`.
+// the planes, within kReach times the total violation (or minReach); else the least-squares compromise from
+// `fallback` along the directions the planes determine well (leastSquaresCompromise).
 const float kReach = DRAPE_REACH;
-const int kLeastSquaresSteps = DRAPE_LEAST_SQUARES_STEPS;
+
+// symmetricEigen3's twin: cyclic Jacobi rotations, a[row][column]; a ends diagonal, v's columns its eigenvectors.
+void symmetricEigen3(inout float a[3][3], out float v[3][3]) {
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) v[i][j] = i == j ? 1.0 : 0.0;
+  for (int sweep = 0; sweep < DRAPE_EIGEN_SWEEPS; ++sweep)
+    for (int p = 0; p < 2; ++p)
+      for (int q = p + 1; q < 3; ++q) {
+        const float apq = a[p][q];
+        precise const float negligible = DRAPE_EIGEN_NEGLIGIBLE * (abs(a[p][p]) + abs(a[q][q]));
+        if (abs(apq) <= negligible) continue;
+        precise const float theta = (a[q][q] - a[p][p]) / (2.0 * apq);
+        precise const float t = (theta >= 0.0 ? 1.0 : -1.0) / (abs(theta) + sqrt(theta * theta + 1.0));
+        precise const float c = 1.0 / sqrt(t * t + 1.0);
+        precise const float sn = t * c;
+        for (int k = 0; k < 3; ++k) {
+          const float akp = a[k][p], akq = a[k][q];
+          precise const float np = c * akp - sn * akq, nq = sn * akp + c * akq;
+          a[k][p] = np;
+          a[k][q] = nq;
+        }
+        for (int k = 0; k < 3; ++k) {
+          const float apk = a[p][k], aqk = a[q][k];
+          precise const float np = c * apk - sn * aqk, nq = sn * apk + c * aqk;
+          a[p][k] = np;
+          a[q][k] = nq;
+        }
+        for (int k = 0; k < 3; ++k) {
+          const float vkp = v[k][p], vkq = v[k][q];
+          precise const float np = c * vkp - sn * vkq, nq = sn * vkp + c * vkq;
+          v[k][p] = np;
+          v[k][q] = nq;
+        }
+      }
+}
+
+// leastSquaresCompromise's twin: DRAPE_LEAST_SQUARES_PASSES passes, each the violated planes' least-squares move
+// along the eigen-directions of sum_k n_k n_k^T whose eigenvalue is at least 1 / kReach^2.
+vec3 leastSquaresCompromise(vec3 n[DRAPE_CONTACT_SLOTS], float b[DRAPE_CONTACT_SLOTS], int count, vec3 from) {
+  const float kWeakest = 1.0 / (DRAPE_REACH * DRAPE_REACH);
+  vec3 y = from;
+  for (int pass = 0; pass < DRAPE_LEAST_SQUARES_PASSES; ++pass) {
+    float a[3][3] = float[3][3](float[3](0.0, 0.0, 0.0), float[3](0.0, 0.0, 0.0), float[3](0.0, 0.0, 0.0));
+    float v[3][3];
+    precise vec3 g = vec3(0.0);
+    for (int k = 0; k < count; ++k) {
+      precise const float r = b[k] - dot3(n[k], y);
+      if (!(r > 0.0)) continue;
+      g = g + r * n[k];
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) {
+          precise const float aij = a[i][j] + n[k][i] * n[k][j];
+          a[i][j] = aij;
+        }
+    }
+    symmetricEigen3(a, v);
+    precise vec3 move = vec3(0.0);
+    for (int i = 0; i < 3; ++i) {
+      if (!(a[i][i] >= kWeakest)) continue;
+      const vec3 e = vec3(v[0][i], v[1][i], v[2][i]);
+      precise const float along = dot3(e, g) / a[i][i];
+      move = move + along * e;
+    }
+    precise const vec3 next = y + move;
+    y = next;
+  }
+  return y;
+}
 
 bool feasibleIn(vec3 n[DRAPE_CONTACT_SLOTS], float b[DRAPE_CONTACT_SLOTS], int count, vec3 y) {
   for (int k = 0; k < count; ++k) {
@@ -221,14 +288,7 @@ vec3 nearestInHalfSpaces(vec3 n[DRAPE_CONTACT_SLOTS], float b[DRAPE_CONTACT_SLOT
       best = candidate[c], bestDist = dist, found = true;
   }
   if (found) return best;
-  best = fallback;
-  for (int it = 0; it < kLeastSquaresSteps; ++it) {
-    precise vec3 stepV = vec3(0.0);
-    for (int k = 0; k < count; ++k) stepV = stepV + max(b[k] - dot3(n[k], best), 0.0) * n[k];
-    precise const vec3 next = best + stepV / float(count);
-    best = next;
-  }
-  return best;
+  return leastSquaresCompromise(n, b, count, fallback);
 }
 
 // The solid's field, packed by drape::gpu::packShape (include/drape/gpu/shapes.hpp).

@@ -1,8 +1,14 @@
 // The contact buffer and the settle onto contact planes (collision/response.hpp), at the level of one vertex:
-// what a vertex touching more surfaces than it has slots for may and may not be moved to.
+// what a vertex touching more surfaces than it has slots for may and may not be moved to, and where a pinched
+// vertex's least-squares compromise puts it.
 #include <drape/drape.hpp>
 
+#include <Eigen/Eigenvalues>
 #include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <random>
+#include <type_traits>
 
 namespace {
 
@@ -58,4 +64,68 @@ TEMPLATE_TEST_CASE("the settle never places a vertex behind a surface that found
   CHECK(with.overflow[0] == with.current);
   const drape::Vec3<S> settled = wedge.settle(with);
   CHECK(settled.z() >= S(0));
+}
+
+TEMPLATE_TEST_CASE("the eigen-decomposition of a 3x3 normal matrix agrees with Eigen's", "[contacts]", float, double) {
+  using S = TestType;
+  // symmetricEigen3 (and its GLSL twin) against Eigen's solver, on sums of one to three outer products of unit
+  // normals (what the least-squares compromise decomposes), including nearly facing and nearly equal pairs.
+  std::mt19937 rng(5);
+  std::normal_distribution<double> g;
+  // Float: a few roundings of entries up to 3. Double: the rotations leave an off-diagonal entry up to
+  // kEigenNegligible times its diagonal pair's sum (at most 6).
+  const double tolerance = std::is_same_v<S, float> ? 2e-5 : 10 * drape::constants::kEigenNegligible * 3;
+  double worst = 0;
+  for (int trial = 0; trial < 2000; ++trial) {
+    const int count = 1 + trial % 3;
+    Eigen::Matrix3d m = Eigen::Matrix3d::Zero();
+    drape::Vec3<S> n0 = drape::Vec3<S>::Zero();
+    for (int k = 0; k < count; ++k) {
+      Eigen::Vector3d n(g(rng), g(rng), g(rng));
+      if (k == 1 && trial % 4 == 1) n = -n0.template cast<double>() + 0.05 * n.normalized();  // nearly facing
+      if (k == 1 && trial % 4 == 3) n = n0.template cast<double>() + 0.01 * n.normalized();   // nearly equal
+      const drape::Vec3<S> ns = n.normalized().cast<S>();
+      if (k == 0) n0 = ns;
+      m += ns.template cast<double>() * ns.template cast<double>().transpose();
+    }
+    S a[3][3], v[3][3];
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) a[i][j] = S(m(i, j));
+    drape::symmetricEigen3(a, v);
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> reference(m);
+    double values[3] = {double(a[0][0]), double(a[1][1]), double(a[2][2])};
+    std::sort(values, values + 3);
+    for (int i = 0; i < 3; ++i) worst = std::max(worst, std::abs(values[i] - reference.eigenvalues()[i]));
+    for (int i = 0; i < 3; ++i) {  // m e = lambda e, and e of unit length
+      const Eigen::Vector3d e(double(v[0][i]), double(v[1][i]), double(v[2][i]));
+      worst = std::max(worst, (m * e - double(a[i][i]) * e).norm());
+      worst = std::max(worst, std::abs(e.norm() - 1));
+      for (int j = 0; j < 3; ++j)
+        if (j != i) worst = std::max(worst, std::abs(double(a[i][j])));
+    }
+  }
+  INFO("largest error " << worst);
+  CHECK(worst <= tolerance);
+}
+
+TEMPLATE_TEST_CASE("a point pinched between two nearly facing planes goes to the middle of the gap, not sideways",
+                   "[contacts][pinch]", float, double) {
+  using S = TestType;
+  // The floor (z >= 0) and a plane facing down, tilted by 0.11 (a face contact's normal at a box's bottom edge),
+  // 4.6 mm apart where the point is: no point is 5 mm from both, and where they meet is 9 mm to the side. The
+  // compromise moves the point along the axis between the planes only, to the middle, where both are violated
+  // alike. Gradient steps toward their meeting point (16 Jacobi steps, the earlier compromise) moved it 0.45 mm
+  // sideways, every substep of a pinched cloth.
+  const drape::Vec3<S> n[2] = {drape::Vec3<S>(0, 0, 1), drape::Vec3<S>(S(0.043), S(0.103), S(-0.994)).normalized()};
+  const drape::Vec3<S> from(S(0.09), S(0.07), S(-0.001));
+  const S b[2] = {S(0), n[1].dot(from) + S(0.0003)};  // 1 mm and 0.3 mm violated
+  const drape::Vec3<S> y = drape::nearestInHalfSpaces(n, b, 2, from, from);
+  const drape::Vec3<S> axis = (n[0] - n[1]).normalized();
+  const drape::Vec3<S> move = y - from;
+  const S sideways = (move - move.dot(axis) * axis).norm();
+  const S r0 = b[0] - n[0].dot(y), r1 = b[1] - n[1].dot(y);
+  INFO("moved " << move.norm() << " m, " << sideways << " m of it sideways; violations left " << r0 << ", " << r1);
+  CHECK(sideways <= 1e-6);
+  CHECK(std::abs(r0 - r1) <= 1e-6);      // balanced: the middle of the gap
+  CHECK(r0 == Approx(0.00065).margin(1e-5));  // half the total violation each
 }

@@ -38,6 +38,7 @@ TEST_CASE("every shared constant reaches the shaders as the float the CPU kernel
                {"DRAPE_PARALLEL_PLANES", c::kParallelPlanes},
                {"DRAPE_CORNER_DETERMINANT", c::kCornerDeterminant},
                {"DRAPE_REACH", c::kReach},
+               {"DRAPE_EIGEN_NEGLIGIBLE", c::kEigenNegligible},
                {"DRAPE_FACE_SEARCH_GAP", c::kFaceSearchGap},
                {"DRAPE_CUT_SLACK", c::kCutSlack},
                {"DRAPE_FLAT_SINE2", c::kFlatSine2},
@@ -60,7 +61,8 @@ TEST_CASE("every shared constant reaches the shaders as the float the CPU kernel
     CHECK(asFloat(text) == float(r.value));
   }
   CHECK(defined(p, "DRAPE_CONTACT_SLOTS") == std::to_string(c::kContactSlots));
-  CHECK(defined(p, "DRAPE_LEAST_SQUARES_STEPS") == std::to_string(c::kLeastSquaresSteps));
+  CHECK(defined(p, "DRAPE_LEAST_SQUARES_PASSES") == std::to_string(c::kLeastSquaresPasses));
+  CHECK(defined(p, "DRAPE_EIGEN_SWEEPS") == std::to_string(c::kEigenSweeps));
   CHECK(defined(p, "DRAPE_MAX_CUTS") == std::to_string(c::kMaxCuts));
   CHECK(defined(p, "DRAPE_GRID_SEARCH_DEPTH") == std::to_string(c::kGridSearchDepth));
   CHECK(defined(p, "DRAPE_GRID_SEARCH_BUDGET") == std::to_string(c::kGridSearchBudget));

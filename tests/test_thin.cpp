@@ -68,16 +68,19 @@ TEMPLATE_TEST_CASE("a thin box between vertex rows: faces catch it, vertices let
   CHECK(verticesBelowRod<TestType>(plate, drape::CollisionMethod::Vertices) > 0);
 }
 
-TEMPLATE_TEST_CASE("a cloth pinched between the floor and a box lower than twice the thickness does not blow up",
+TEMPLATE_TEST_CASE("a cloth pinched between the floor and a box lower than twice the thickness holds still",
                    "[thin][pinch]", float, double) {
   using S = TestType;
   // A 0.4 m cloth on the floor under a 0.16 m box whose bottom is 1.6-1.9 thicknesses up: under the box no
-  // position satisfies both surfaces. Before the pinched vertices were placed by least squares from where
-  // they started, and the velocity put in the cone that approaches no surface, the rim vertices were thrown
-  // sideways along the far-away meeting line of the floor and the box's slightly tilted merged normal, and the
-  // cloth reached 45 m/s at 1.6 thicknesses. Measured now, the fastest vertex over the last half second:
-  // 0.18-0.32 m/s (double), 0.36-1.21 m/s (float). That is not calm: the rim vertices whose faces touch the
-  // box's bottom edges still tremble (with vertex contacts only the cloth is at rest), a known issue.
+  // position satisfies both surfaces, so the pinched vertices take the least-squares compromise. The rim
+  // vertices' faces touch the box's bottom edges and record slightly tilted normals there, nearly facing the
+  // floor's. When that compromise was found by gradient steps toward where the two planes meet (far off to the
+  // side), each substep moved the rim sideways by the tilt times the violations, and the constraint solve turned
+  // it into velocity: the fastest vertex over the last half second was at 0.18-0.32 m/s (double) and
+  // 0.36-1.21 m/s (float). Along the well-determined directions only, frictionless, it is at 0.8-2.1 mm/s: the
+  // whole cloth still slides, smoothly, on what the first squeeze gave it (nothing frictionless takes that
+  // away). With friction the pinched cloth is at rest (at most 4e-6 m/s measured; 1e-3 is asserted).
+  const double friction = GENERATE(0.0, 0.5);
   for (const double gapInThicknesses : {1.9, 1.8, 1.6}) {
     drape::Settings settings;
     drape::SheetDesc grid;
@@ -85,10 +88,13 @@ TEMPLATE_TEST_CASE("a cloth pinched between the floor and a box lower than twice
     grid.spacing = 0.02;
     grid.placement.position = {0, 0, settings.thickness};
     drape::Solver<S> cloth(std::make_shared<const drape::ClothAsset<S>>(drape::ClothAsset<S>::sheet(grid)), settings);
-    cloth.addSolid(drape::Solid<drape::Plane>{});
+    drape::Solid<drape::Plane> floor;
+    floor.staticFriction = floor.dynamicFriction = friction;
+    cloth.addSolid(floor);
     drape::Solid<drape::Box> box;
     box.shape.halfExtents = {0.08, 0.08, 0.04};
     box.pose.position = {0.005, -0.003, gapInThicknesses * settings.thickness + 0.04};
+    box.staticFriction = box.dynamicFriction = friction;
     cloth.addSolid(box);
     double fastest = 0, lowest = 1e9, highest = -1e9;
     for (int s = 0; s < 100; ++s) {
@@ -100,9 +106,9 @@ TEMPLATE_TEST_CASE("a cloth pinched between the floor and a box lower than twice
         highest = std::max(highest, cloth.position(i).z());
       }
     }
-    INFO("gap " << gapInThicknesses << " thicknesses: fastest vertex " << fastest << " m/s over the last 0.5 s, z in ["
-                << lowest << ", " << highest << "] m");
-    CHECK(fastest <= 2.0);
+    INFO("friction " << friction << ", gap " << gapInThicknesses << " thicknesses: fastest vertex " << fastest
+                     << " m/s over the last 0.5 s, z in [" << lowest << ", " << highest << "] m");
+    CHECK(fastest <= (friction > 0 ? 1e-3 : 5e-3));
     CHECK(lowest >= 0);                          // never through the floor
     CHECK(highest <= 3 * settings.thickness);    // nor thrown up
   }

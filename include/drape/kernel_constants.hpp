@@ -19,8 +19,12 @@ inline constexpr double kParallelPlanes = 1e-6;
 inline constexpr double kCornerDeterminant = 1e-4;
 /// Farthest accepted move to the planes, in total violations (tangent planes say nothing far away).
 inline constexpr double kReach = 4;
-/// Jacobi steps of the least-squares compromise for a point pinched between surfaces.
-inline constexpr int kLeastSquaresSteps = 16;
+/// Passes of the least-squares compromise for a point pinched between surfaces (leastSquaresCompromise).
+inline constexpr int kLeastSquaresPasses = 2;
+/// Sweeps of Jacobi rotations in the eigen-decomposition of its 3x3 normal matrix (symmetricEigen3).
+inline constexpr int kEigenSweeps = 5;
+/// An off-diagonal entry at most this times the sum of its two diagonal entries is left alone by the rotations.
+inline constexpr double kEigenNegligible = 1e-12;
 
 // The search for a face's deepest point (docs/design.md §3).
 /// Most cutting planes the convex search keeps.

@@ -512,15 +512,81 @@ S projectFaceContacts(const CompiledSolid<Shape, S>& solid, S thickness, int pgd
 }
 
 
+/// The eigen-decomposition of a symmetric 3x3 matrix by cyclic Jacobi rotations, kEigenSweeps sweeps: `a` ends
+/// diagonal (its eigenvalues on the diagonal), the columns of `v` its unit eigenvectors. Written out so that the
+/// GLSL twin (shaders/common.glsl) does the same arithmetic in the same order.
+template <Scalar S> void symmetricEigen3(S (&a)[3][3], S (&v)[3][3]) {
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) v[i][j] = i == j ? S(1) : S(0);
+  for (int sweep = 0; sweep < constants::kEigenSweeps; ++sweep)
+    for (int p = 0; p < 2; ++p)
+      for (int q = p + 1; q < 3; ++q) {
+        const S apq = a[p][q];
+        // Negligible beside the diagonal: left as it is (and theta, below, stays far from overflowing).
+        if (std::abs(apq) <= S(constants::kEigenNegligible) * (std::abs(a[p][p]) + std::abs(a[q][q]))) continue;
+        // The rotation in the (p, q) plane that zeroes a[p][q] (the smaller angle; tan = t).
+        const S theta = (a[q][q] - a[p][p]) / (S(2) * apq);
+        const S t = (theta >= S(0) ? S(1) : S(-1)) / (std::abs(theta) + std::sqrt(theta * theta + S(1)));
+        const S c = S(1) / std::sqrt(t * t + S(1)), sn = t * c;
+        for (int k = 0; k < 3; ++k) {  // a J
+          const S akp = a[k][p], akq = a[k][q];
+          a[k][p] = c * akp - sn * akq;
+          a[k][q] = sn * akp + c * akq;
+        }
+        for (int k = 0; k < 3; ++k) {  // J^T (a J)
+          const S apk = a[p][k], aqk = a[q][k];
+          a[p][k] = c * apk - sn * aqk;
+          a[q][k] = sn * apk + c * aqk;
+        }
+        for (int k = 0; k < 3; ++k) {  // v J
+          const S vkp = v[k][p], vkq = v[k][q];
+          v[k][p] = c * vkp - sn * vkq;
+          v[k][q] = sn * vkp + c * vkq;
+        }
+      }
+}
+
+/// The least-squares compromise for a point that no nearby point puts outside all of up to three half-spaces
+/// n_k . y >= b_k (a cloth pinched in a gap narrower than twice its thickness): from `from`, the violated planes'
+/// least-squares move along the directions they determine well. Two nearly facing planes pin the point along
+/// the axis between them and hardly at all across it; their exact least-squares point is where they meet, far to
+/// the side, and a step toward it every substep feeds the constraint solve a sideways jump (docs/design.md §16).
+/// So eigen-directions of sum_k n_k n_k^T whose eigenvalue is below 1/kReach^2, along which the planes would move
+/// the point more than kReach times its violation, are left out: between two facing planes the point goes to the
+/// middle of the gap. kLeastSquaresPasses passes, each on the planes still violated.
+template <Scalar S> Vec3<S> leastSquaresCompromise(const Vec3<S>* n, const S* b, int count, const Vec3<S>& from) {
+  constexpr S kWeakest = S(1 / (constants::kReach * constants::kReach));
+  Vec3<S> y = from;
+  for (int pass = 0; pass < constants::kLeastSquaresPasses; ++pass) {
+    S a[3][3] = {}, v[3][3];
+    Vec3<S> g = Vec3<S>::Zero();  // sum_k r_k n_k over the violated planes
+    for (int k = 0; k < count; ++k) {
+      const S r = b[k] - n[k].dot(y);
+      if (!(r > S(0))) continue;
+      g += r * n[k];
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) a[i][j] += n[k][i] * n[k][j];
+    }
+    symmetricEigen3(a, v);
+    Vec3<S> move = Vec3<S>::Zero();
+    for (int i = 0; i < 3; ++i) {
+      if (!(a[i][i] >= kWeakest)) continue;
+      const Vec3<S> e(v[0][i], v[1][i], v[2][i]);
+      move += (e.dot(g) / a[i][i]) * e;
+    }
+    y += move;
+  }
+  return y;
+}
+
 /// The point nearest to y0 in {y : n_k . y >= b_k} for up to three half-spaces: the nearest feasible point
 /// among the projections onto every subset of the planes, which is the exact projection onto their
 /// intersection. The planes are tangents of curved surfaces, so far from y0 they say nothing: two nearly
 /// facing planes (a cloth pinched under a box whose merged normal is tilted a little) meet far away, and going
 /// there would throw the point sideways. A candidate further than kReach times the total violation (or than
-/// `minReach`, if that is more) counts as
-/// none; where there is none (also when the half-spaces do not meet, as in a gap narrower than twice the
-/// thickness), the answer is the least-squares compromise reached by Jacobi steps on
-/// sum_k max(0, b_k - n_k . y)^2 from `fallback` (between two facing planes, the middle of the gap).
+/// `minReach`, if that is more) counts as none; where there is none (also when the half-spaces do not meet, as
+/// in a gap narrower than twice the thickness), the answer is the least-squares compromise from `fallback`
+/// (leastSquaresCompromise: between two facing planes, the middle of the gap).
 template <Scalar S>
 Vec3<S> nearestInHalfSpaces(const Vec3<S>* n, const S* b, int count, const Vec3<S>& y0, const Vec3<S>& fallback,
                             S minReach = S(0)) {
@@ -554,13 +620,7 @@ Vec3<S> nearestInHalfSpaces(const Vec3<S>* n, const S* b, int count, const Vec3<
     if (std::abs(m.determinant()) > S(constants::kCornerDeterminant)) consider(m.partialPivLu().solve(Vec3<S>(b[0], b[1], b[2])));
   }
   if (bestDist < std::numeric_limits<S>::infinity()) return best;
-  best = fallback;
-  for (int it = 0; it < constants::kLeastSquaresSteps; ++it) {
-    Vec3<S> step = Vec3<S>::Zero();
-    for (int k = 0; k < count; ++k) step += std::max(b[k] - n[k].dot(best), S(0)) * n[k];
-    best += step / S(count);
-  }
-  return best;
+  return leastSquaresCompromise(n, b, count, fallback);
 }
 
 /// A vertex pushed out of several surfaces one after another (a crease, a box corner, a cloth pinched
