@@ -234,18 +234,33 @@ nlohmann::ordered_json run(const Options& o, [[maybe_unused]] Painter* painter, 
   int maxPenStep = 0, maxBodySpeedStep = 0, maxBodySpinStep = 0;
   int throughAtRelease = -1, offAtRelease = -1;
   bool finite = true;
-  // Bodies that went through the cloth (centre below the cloth vertex nearest in x, y, while over the cloth)
-  // and bodies no longer over it, measured just before the release.
-  auto countThroughAndOff = [&] {
-    double minX = 1e300, maxX = -1e300, minY = 1e300, maxY = -1e300;
-    for (Index i = 0; i < n; ++i) {
-      const Vector3d p = cloth.position(i);
-      minX = std::min(minX, p.x()), maxX = std::max(maxX, p.x()), minY = std::min(minY, p.y()), maxY = std::max(maxY, p.y());
+  // Bodies that went through the cloth and bodies not over it, measured just before the release. A body is over
+  // the cloth where its centre lies inside the outline of the cloth's boundary vertices in x, y (even-odd rule),
+  // and through it where the centre is also below the cloth vertex nearest it in x, y. The outline, not the
+  // cloth's bounding rectangle: the pinned cloth's edges sag inward, and a body that fell past one lies inside
+  // the rectangle, below the edge.
+  std::vector<Index> outline;  // the sheet's boundary vertices in order around it
+  {
+    const Index nx = o.config.nx, ny = o.config.ny;
+    for (Index i = 0; i < nx; ++i) outline.push_back(i);
+    for (Index j = 1; j < ny; ++j) outline.push_back(j * nx + nx - 1);
+    for (Index i = nx - 2; i >= 0; --i) outline.push_back((ny - 1) * nx + i);
+    for (Index j = ny - 2; j >= 1; --j) outline.push_back(j * nx);
+  }
+  auto insideOutline = [&](const Vector3d& c) {
+    bool inside = false;
+    for (std::size_t k = 0, l = outline.size() - 1; k < outline.size(); l = k++) {
+      const Vector3d a = cloth.position(outline[k]), b = cloth.position(outline[l]);
+      if ((a.y() > c.y()) != (b.y() > c.y()) && c.x() < a.x() + (c.y() - a.y()) * (b.x() - a.x()) / (b.y() - a.y()))
+        inside = !inside;
     }
+    return inside;
+  };
+  auto countThroughAndOff = [&] {
     int through = 0, off = 0;
     for (int b = 0; b < bodies; ++b) {
       const Vector3d c = world.body(b).pose().position;
-      if (c.x() < minX || c.x() > maxX || c.y() < minY || c.y() > maxY) {
+      if (!insideOutline(c)) {
         ++off;
         continue;
       }
