@@ -4,6 +4,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cstring>
 #include <memory>
 #include <random>
@@ -162,4 +163,84 @@ TEMPLATE_TEST_CASE("a vertex pinned or freed between steps is solved with its ne
   solver.setInverseMass(middle, 1.0);
   for (int f = 0; f < 20; ++f) solver.step(1.0 / 60.0);
   CHECK(solver.position(middle).z() < held.z() - 0.01);
+}
+
+TEST_CASE("the four-lane contact response gives the scalar response's bits", "[simd][contacts]") {
+  if (drape::bestSimdLevel() < SimdLevel::Sse2) WARN("this build has no SSE2: only the scalar response runs");
+  if (kFusedBuild) WARN("a build with FMA: the responses are compared to rounding, not bit for bit");
+  using V = drape::Vec3<float>;
+  const Index n = 403;  // not a multiple of four: a partial four at the end
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f), unit(0.0f, 1.0f);
+  drape::ContactBuffer<float> contacts;
+  contacts.resize(n);
+  contacts.begin();
+  std::vector<V> x0(n), xPrev(n), v0(n);
+  int stuck = 0, sliding = 0, resting = 0;
+  const float h = 1.0f / 300.0f;
+  for (Index i = 0; i < n; ++i) {
+    xPrev[i] = 0.01f * V(u(rng), u(rng), u(rng));  // near the origin, where a last bit of a move shows
+    x0[i] = xPrev[i] + 2e-3f * V(u(rng), u(rng), u(rng));
+    v0[i] = V(u(rng), u(rng), u(rng));
+    if (i % 11 == 5) continue;  // not in contact: its four takes the scalar path
+    const int slots = i % 13 == 7 ? 2 : 1;  // a second surface: the scalar path too
+    contacts.stamp[i] = contacts.current;
+    contacts.slotCount[i] = std::uint8_t(slots);
+    for (int k = 0; k < slots; ++k) {
+      drape::ContactSlot<float> c;
+      c.normal = V(u(rng), u(rng), u(rng)).normalized();
+      c.solidVelocity = i % 3 == 0 ? V::Zero() : V(0.2f * u(rng), 0.2f * u(rng), 0.2f * u(rng));
+      c.correction = 2e-3f * unit(rng);
+      c.staticFriction = i % 7 == 0 ? 0.0f : 2.0f * unit(rng);
+      c.dynamicFriction = c.staticFriction * unit(rng);
+      c.offset = c.normal.dot(x0[i]);
+      c.body = -1;
+      contacts.slots[i][k] = c;
+    }
+    const drape::ContactSlot<float>& c = contacts.slots[i][0];
+    if (i % 17 == 0) v0[i] = c.solidVelocity;  // no speed relative to the solid: the speed's division is skipped
+    if (i % 17 == 0) ++resting;
+    if (slots == 1) {
+      const V disp = (x0[i] - xPrev[i]) - h * c.solidVelocity;
+      const bool stick = (disp - c.normal.dot(disp) * c.normal).norm() <= c.staticFriction * c.correction;
+      (stick ? stuck : sliding)++;
+    }
+  }
+  // The inputs reach both of friction's cases and a vertex at rest on its solid.
+  CHECK(stuck > 20);
+  CHECK(sliding > 20);
+  CHECK(resting > 10);
+  for (const bool friction : {false, true}) {
+    auto run = [&](SimdLevel level, std::vector<V>& x, std::vector<V>& v, std::vector<float>& dv) {
+      x = x0, v = v0;
+      drape::ContactBuffer<float> c = contacts;
+      for (Index begin = 0; begin < n; begin += 100) {  // shares of 100, as threads would take them
+        const Index end = std::min(begin + 100, n);
+        if (friction)
+          drape::respondContacts<true>(begin, end, c, x.data(), xPrev.data(), v.data(), h, 0.3f, level);
+        else
+          drape::respondContacts<false>(begin, end, c, x.data(), xPrev.data(), v.data(), h, 0.3f, level);
+      }
+      dv = c.normalDv;
+      for (Index i = 0; i < n; ++i)
+        if (!c.live(i)) dv[i] = 0;  // not written for a vertex out of contact
+    };
+    std::vector<V> xs, vs, xv, vv;
+    std::vector<float> dvs, dvv;
+    run(SimdLevel::Scalar, xs, vs, dvs);
+    run(SimdLevel::Sse2, xv, vv, dvv);
+    INFO("friction " << friction);
+    CHECK((xs != x0) == friction);  // friction moved positions, and only friction
+    CHECK(vs != v0);
+    auto agreeV = [](const std::vector<V>& a, const std::vector<V>& b) {
+      if (!kFusedBuild) return std::memcmp(a.data(), b.data(), a.size() * sizeof(V)) == 0;
+      for (std::size_t i = 0; i < a.size(); ++i)
+        if ((a[i] - b[i]).cwiseAbs().maxCoeff() > 1e-6f) return false;
+      return true;
+    };
+    CHECK(agreeV(xs, xv));
+    CHECK(agreeV(vs, vv));
+    if (!kFusedBuild)
+      CHECK(std::memcmp(dvs.data(), dvv.data(), dvs.size() * sizeof(float)) == 0);
+  }
 }

@@ -436,9 +436,14 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     const S* w = state_.invMass.data();
     const bool faces = settings_.collisionMethod == CollisionMethod::Faces;
     const S damping = S(settings_.normalDamping);
+    // Shares of whole fours: the SIMD response takes aligned fours (respondContacts), the same ones on any
+    // number of threads.
+    const SimdLevel level = simdLevelFor<S>(bestSimdLevel());
+    const Index n = vertexCount();
     withFlags([&](auto friction) {
-      teamFor(vertexCount(), [&](Index b, Index e) {
-        respondContacts<friction()>(b, e, passes_.contacts(), x, xPrev_.data(), v, h, damping);
+      teamFor((n + 3) / 4, [&](Index b, Index e) {
+        respondContacts<friction()>(4 * b, std::min(4 * e, n), passes_.contacts(), x, xPrev_.data(), v, h, damping,
+                                    level);
       });
     }, hasFriction_);
     if (!(faces && settings_.propagationRings > 0 && settings_.propagationWeight > 0)) return;

@@ -10,6 +10,7 @@
 #include <drape/sdf/solid.hpp>
 
 #include <drape/detail/parallel.hpp>
+#include <drape/detail/simd.hpp>
 
 #include <array>
 #include <cmath>
@@ -655,7 +656,8 @@ S projectOntoContactPlanes(Index begin, Index end, const ContactBuffer<S>& conta
 /// Coulomb friction on positions for one contact surface: the tangential displacement of this substep
 /// (relative to the solid) within staticFriction * dn is undone entirely (stick, returns true); beyond it,
 /// dynamicFriction * dn of it is undone. So a cloth that should stick does not creep g sin(theta) h per substep.
-template <Scalar S> bool applyPositionFriction(const ContactSlot<S>& c, Vec3<S>& x, const Vec3<S>& xPrev, S h) {
+template <Scalar S>
+DRAPE_ALWAYS_INLINE bool applyPositionFriction(const ContactSlot<S>& c, Vec3<S>& x, const Vec3<S>& xPrev, S h) {
   const Vec3<S>& n = c.normal;
   const Vec3<S> disp = (x - xPrev) - h * c.solidVelocity;
   const Vec3<S> dispT = disp - n.dot(disp) * n;
@@ -668,6 +670,92 @@ template <Scalar S> bool applyPositionFriction(const ContactSlot<S>& c, Vec3<S>&
   return false;
 }
 
+#if DRAPE_SSE2
+namespace detail {
+
+/// Four consecutive Vec3<float> (12 floats) as three registers, one per coordinate, and back.
+inline void loadVec3Four(const Vec3<float>* p, __m128& vx, __m128& vy, __m128& vz) {
+  const float* f = p->data();
+  const __m128 a = _mm_loadu_ps(f), b = _mm_loadu_ps(f + 4), c = _mm_loadu_ps(f + 8);  // x0y0z0x1 y1z1x2y2 z2x3y3z3
+  vx = _mm_shuffle_ps(a, _mm_shuffle_ps(b, c, _MM_SHUFFLE(1, 0, 3, 2)), _MM_SHUFFLE(3, 0, 3, 0));
+  vy = _mm_shuffle_ps(_mm_shuffle_ps(a, b, _MM_SHUFFLE(0, 0, 1, 1)), _mm_shuffle_ps(b, c, _MM_SHUFFLE(2, 2, 3, 3)),
+                      _MM_SHUFFLE(2, 0, 2, 0));
+  vz = _mm_shuffle_ps(_mm_shuffle_ps(a, b, _MM_SHUFFLE(1, 1, 2, 2)), _mm_shuffle_ps(c, c, _MM_SHUFFLE(3, 3, 0, 0)),
+                      _MM_SHUFFLE(2, 0, 2, 0));
+}
+inline void storeVec3Four(Vec3<float>* p, __m128 vx, __m128 vy, __m128 vz) {
+  float* f = p->data();
+  _mm_storeu_ps(f, _mm_shuffle_ps(_mm_unpacklo_ps(vx, vy), _mm_shuffle_ps(vz, vx, _MM_SHUFFLE(1, 1, 0, 0)),
+                                  _MM_SHUFFLE(2, 0, 1, 0)));
+  _mm_storeu_ps(f + 4, _mm_shuffle_ps(_mm_shuffle_ps(vy, vz, _MM_SHUFFLE(1, 1, 1, 1)),
+                                      _mm_shuffle_ps(vx, vy, _MM_SHUFFLE(2, 2, 2, 2)), _MM_SHUFFLE(2, 0, 2, 0)));
+  _mm_storeu_ps(f + 8, _mm_shuffle_ps(_mm_shuffle_ps(vz, vx, _MM_SHUFFLE(3, 3, 2, 2)),
+                                      _mm_shuffle_ps(vy, vz, _MM_SHUFFLE(3, 3, 3, 3)), _MM_SHUFFLE(2, 0, 2, 0)));
+}
+/// Eigen's order for a 3-vector's dot product: a0 b0 + (a1 b1 + a2 b2).
+inline __m128 dotFour(__m128 ax, __m128 ay, __m128 az, __m128 bx, __m128 by, __m128 bz) {
+  return _mm_add_ps(_mm_mul_ps(ax, bx), _mm_add_ps(_mm_mul_ps(ay, by), _mm_mul_ps(az, bz)));
+}
+
+/// respondContacts for vertices i .. i + 3, each live with one contact slot: lane by lane the scalar loop's
+/// operations in its order (so its bits), four vertices at a time. A vertex's friction waits on two square roots
+/// and two divisions; one at a time, the processor overlapped little of one vertex's wait with the next's.
+template <bool kFriction>
+inline void respondFour(Index i, ContactBuffer<float>& contacts, Vec3<float>* x, const Vec3<float>* xPrev,
+                        Vec3<float>* v, float h, float invH, float normalDamping) {
+  static_assert(sizeof(ContactSlot<float>) == 11 * sizeof(float), "ContactSlot<float> is read as 11 floats");
+  // Rows (nx ny nz vcx), (vcy vcz correction staticFriction) of each slot, transposed to one field per register.
+  const float* s0 = reinterpret_cast<const float*>(contacts.slots[i].data());
+  const float* s1 = reinterpret_cast<const float*>(contacts.slots[i + 1].data());
+  const float* s2 = reinterpret_cast<const float*>(contacts.slots[i + 2].data());
+  const float* s3 = reinterpret_cast<const float*>(contacts.slots[i + 3].data());
+  __m128 nx = _mm_loadu_ps(s0), ny = _mm_loadu_ps(s1), nz = _mm_loadu_ps(s2), cx = _mm_loadu_ps(s3);
+  _MM_TRANSPOSE4_PS(nx, ny, nz, cx);
+  __m128 cy = _mm_loadu_ps(s0 + 4), cz = _mm_loadu_ps(s1 + 4), dn = _mm_loadu_ps(s2 + 4), muS = _mm_loadu_ps(s3 + 4);
+  _MM_TRANSPOSE4_PS(cy, cz, dn, muS);
+  __m128 vx, vy, vz;
+  loadVec3Four(v + i, vx, vy, vz);
+  const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f);
+  const __m128 rx = _mm_sub_ps(vx, cx), ry = _mm_sub_ps(vy, cy), rz = _mm_sub_ps(vz, cz);
+  const __m128 vn = dotFour(nx, ny, nz, rx, ry, rz);
+  __m128 tx = _mm_sub_ps(rx, _mm_mul_ps(vn, nx)), ty = _mm_sub_ps(ry, _mm_mul_ps(vn, ny)),
+         tz = _mm_sub_ps(rz, _mm_mul_ps(vn, nz));
+  const __m128 vnNew = _mm_andnot_ps(_mm_cmplt_ps(vn, zero), _mm_mul_ps(vn, _mm_set1_ps(1.0f - normalDamping)));
+  if constexpr (kFriction) {
+    const __m128 muD = _mm_setr_ps(s0[8], s1[8], s2[8], s3[8]);
+    const __m128 slideLimit = _mm_mul_ps(muD, dn);  // dynamicFriction * correction
+    const __m128 speed = _mm_sqrt_ps(dotFour(tx, ty, tz, tx, ty, tz));
+    const __m128 slow = _mm_mul_ps(slideLimit, _mm_set1_ps(invH));
+    const __m128 fast = _mm_cmpgt_ps(speed, slow);
+    const __m128 keep = _mm_and_ps(fast, _mm_div_ps(_mm_sub_ps(speed, slow), select(fast, speed, one)));
+    __m128 px, py, pz, qx, qy, qz;
+    loadVec3Four(x + i, px, py, pz);
+    loadVec3Four(xPrev + i, qx, qy, qz);
+    const __m128 hv = _mm_set1_ps(h);
+    const __m128 dx = _mm_sub_ps(_mm_sub_ps(px, qx), _mm_mul_ps(hv, cx));
+    const __m128 dy = _mm_sub_ps(_mm_sub_ps(py, qy), _mm_mul_ps(hv, cy));
+    const __m128 dz = _mm_sub_ps(_mm_sub_ps(pz, qz), _mm_mul_ps(hv, cz));
+    const __m128 dd = dotFour(nx, ny, nz, dx, dy, dz);
+    const __m128 ex = _mm_sub_ps(dx, _mm_mul_ps(dd, nx)), ey = _mm_sub_ps(dy, _mm_mul_ps(dd, ny)),
+                 ez = _mm_sub_ps(dz, _mm_mul_ps(dd, nz));
+    const __m128 slip = _mm_sqrt_ps(dotFour(ex, ey, ez, ex, ey, ez));
+    const __m128 stick = _mm_cmple_ps(slip, _mm_mul_ps(muS, dn));
+    const __m128 undo = select(stick, one, _mm_min_ps(_mm_div_ps(slideLimit, select(stick, one, slip)), one));
+    storeVec3Four(x + i, _mm_sub_ps(px, _mm_mul_ps(undo, ex)), _mm_sub_ps(py, _mm_mul_ps(undo, ey)),
+                  _mm_sub_ps(pz, _mm_mul_ps(undo, ez)));
+    tx = _mm_andnot_ps(stick, _mm_mul_ps(tx, keep));
+    ty = _mm_andnot_ps(stick, _mm_mul_ps(ty, keep));
+    tz = _mm_andnot_ps(stick, _mm_mul_ps(tz, keep));
+  }
+  storeVec3Four(v + i, _mm_add_ps(_mm_add_ps(cx, _mm_mul_ps(vnNew, nx)), tx),
+                _mm_add_ps(_mm_add_ps(cy, _mm_mul_ps(vnNew, ny)), ty),
+                _mm_add_ps(_mm_add_ps(cz, _mm_mul_ps(vnNew, nz)), tz));
+  _mm_storeu_ps(contacts.normalDv.data() + i, _mm_add_ps(zero, _mm_max_ps(zero, _mm_sub_ps(vnNew, vn))));
+}
+
+}  // namespace detail
+#endif
+
 /// The velocity split of the SDF collision paper (Fig 3) for every contact vertex of [begin, end) and each surface it
 /// touches, relative to that solid: the approaching normal velocity is removed, a separating one is damped by
 /// normalDamping, the tangential velocity is kept minus Coulomb friction. Friction acts on positions
@@ -677,9 +765,22 @@ template <Scalar S> bool applyPositionFriction(const ContactSlot<S>& c, Vec3<S>&
 /// of the scene has friction) compiles the friction out.
 template <bool kFriction, Scalar S>
 void respondContacts(Index begin, Index end, ContactBuffer<S>& contacts, Vec3<S>* x, const Vec3<S>* xPrev,
-                     Vec3<S>* v, S h, S normalDamping) {
+                     Vec3<S>* v, S h, S normalDamping, SimdLevel level = SimdLevel::Scalar) {
   const S invH = S(1) / h;
   for (Index i = begin; i < end; ++i) {
+#if DRAPE_SSE2
+    if constexpr (std::is_same_v<S, float>) {
+      // Four at a time where i is a multiple of four (so the same vertices whatever the threads' shares) and
+      // all four touch one surface each.
+      if (level != SimdLevel::Scalar && i % 4 == 0 && i + 4 <= end && contacts.live(i) && contacts.live(i + 1) &&
+          contacts.live(i + 2) && contacts.live(i + 3) && contacts.slotCount[i] == 1 &&
+          contacts.slotCount[i + 1] == 1 && contacts.slotCount[i + 2] == 1 && contacts.slotCount[i + 3] == 1) {
+        detail::respondFour<kFriction>(i, contacts, x, xPrev, v, h, invH, normalDamping);
+        i += 3;
+        continue;
+      }
+    }
+#endif
     if (!contacts.live(i)) continue;
     S dvnSum = 0;
     for (int k = 0; k < contacts.slotCount[i]; ++k) {
@@ -690,13 +791,15 @@ void respondContacts(Index begin, Index end, ContactBuffer<S>& contacts, Vec3<S>
       Vec3<S> vt = vRel - vn * n;
       const S vnNew = vn < S(0) ? S(0) : vn * (S(1) - normalDamping);
       if constexpr (kFriction) {
-        if (applyPositionFriction(c, x[i], xPrev[i], h)) {
+        // The tangential speed is taken before the position's friction decides: the two square roots and
+        // divisions then overlap instead of waiting on each other.
+        const S speed = vt.norm();
+        const S slow = c.dynamicFriction * c.correction * invH;
+        const S keep = speed > slow ? (speed - slow) / speed : S(0);
+        if (applyPositionFriction(c, x[i], xPrev[i], h))
           vt.setZero();
-        } else {
-          const S speed = vt.norm();
-          const S slow = c.dynamicFriction * c.correction * invH;
-          vt *= speed > slow ? (speed - slow) / speed : S(0);
-        }
+        else
+          vt *= keep;
       }
       v[i] = c.solidVelocity + vnNew * n + vt;
       dvnSum += std::max(vnNew - vn, S(0));

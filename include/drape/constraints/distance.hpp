@@ -14,20 +14,7 @@
 #include <drape/cloth/asset.hpp>
 #include <drape/cloth/spin.hpp>
 
-#if defined(__SSE2__) || defined(_M_X64) || (defined(_M_IX86_FP) && _M_IX86_FP >= 2)
-#include <emmintrin.h>
-#define DRAPE_SSE2 1
-#else
-#define DRAPE_SSE2 0
-#endif
-// GCC and Clang on x86 also compile an AVX2 kernel (eight constraints at a time) whatever the build's flags,
-// and take it where the processor has AVX2. It is compiled without FMA, so it rounds exactly as the others.
-#if DRAPE_SSE2 && (defined(__GNUC__) || defined(__clang__)) && (defined(__x86_64__) || defined(__i386__))
-#include <immintrin.h>
-#define DRAPE_AVX2 1
-#else
-#define DRAPE_AVX2 0
-#endif
+#include <drape/detail/simd.hpp>
 
 namespace drape {
 
@@ -121,9 +108,6 @@ inline void solveDistance(Index a, Index b, S rest, S alphaTilde, S* lambda, Vec
 }
 
 #if DRAPE_SSE2
-/// (m ? a : b) lane by lane, from a comparison mask.
-inline __m128 select(__m128 m, __m128 a, __m128 b) { return _mm_or_ps(_mm_and_ps(m, a), _mm_andnot_ps(m, b)); }
-
 /// Lane k of v in every lane.
 template <int k> inline __m128 broadcast(__m128 v) { return _mm_shuffle_ps(v, v, _MM_SHUFFLE(k, k, k, k)); }
 
@@ -269,33 +253,6 @@ DRAPE_TARGET_AVX2 void solveColourAvx2(Index begin, Index end, const DistanceBlo
 #endif
 
 }  // namespace detail
-
-/// The widest constraint kernel the build and the processor allow, or a narrower one on request (tests compare
-/// them, benches time them): Scalar is one constraint at a time, Sse2 four, Avx2 eight. Double always runs the
-/// scalar kernel.
-enum class SimdLevel { Scalar, Sse2, Avx2 };
-
-/// The widest level this build can run here (checked once).
-inline SimdLevel bestSimdLevel() {
-#if DRAPE_AVX2
-  static const bool avx2 = [] {
-    __builtin_cpu_init();
-    return __builtin_cpu_supports("avx2") != 0;
-  }();
-  return avx2 ? SimdLevel::Avx2 : SimdLevel::Sse2;
-#elif DRAPE_SSE2
-  return SimdLevel::Sse2;
-#else
-  return SimdLevel::Scalar;
-#endif
-}
-
-/// The kernel a solve at `level` runs for scalar type S: a level this build or processor lacks falls back to the
-/// next narrower one; double always runs the scalar kernel.
-template <Scalar S> SimdLevel simdLevelFor(SimdLevel level) {
-  if constexpr (!std::is_same_v<S, float>) return SimdLevel::Scalar;
-  return level > bestSimdLevel() ? bestSimdLevel() : level;
-}
 
 /// How many items colour c of a set has for the kernel of `level` (simdLevelFor): its constraints (scalar), its
 /// blocks (SSE2), or its pairs of blocks and an odd last block (AVX2). Threads share a colour's work in whole
