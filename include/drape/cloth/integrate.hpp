@@ -16,19 +16,19 @@ namespace drape {
 template <bool kKeepStart, bool kDamp, Scalar S>
 void predictPositions(Index begin, Index end, const Vec3<S>* x, Vec3<S>* v, const S* w, const Vec3<S>& gh, S h,
                       Vec3<S>* x0, Vec3<S>* xp, Vec4<S>* xw, [[maybe_unused]] S keep = S(1)) {
+  // Written coordinate by coordinate: in a large solver the compiler called Eigen's p += h v out of line, a
+  // tenth of a step on the slope.
   for (Index i = begin; i < end; ++i) {
     if constexpr (kKeepStart) x0[i] = x[i];
-    Vec3<S> p = x[i];
+    S px = x[i].x(), py = x[i].y(), pz = x[i].z();
     if (w[i] != S(0)) {
-      if constexpr (kDamp) {
-        v[i] = keep * (v[i] + gh);
-      } else {
-        v[i] += gh;
-      }
-      p += h * v[i];
+      S vx = v[i].x() + gh.x(), vy = v[i].y() + gh.y(), vz = v[i].z() + gh.z();
+      if constexpr (kDamp) vx *= keep, vy *= keep, vz *= keep;
+      v[i] = Vec3<S>(vx, vy, vz);
+      px += h * vx, py += h * vy, pz += h * vz;
     }
-    xp[i] = p;
-    xw[i] = Vec4<S>(p.x(), p.y(), p.z(), S(0));
+    xp[i] = Vec3<S>(px, py, pz);
+    xw[i] = Vec4<S>(px, py, pz, S(0));
   }
 }
 
