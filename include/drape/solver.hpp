@@ -436,13 +436,13 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     const S* w = state_.invMass.data();
     const bool faces = settings_.collisionMethod == CollisionMethod::Faces;
     const S damping = S(settings_.normalDamping);
-    // Shares of whole fours: the SIMD response takes aligned fours (respondContacts), the same ones on any
-    // number of threads.
+    // Shares of whole eights: the SIMD response takes aligned eights and fours (respondContacts), the same ones
+    // on any number of threads.
     const SimdLevel level = simdLevelFor<S>(bestSimdLevel());
     const Index n = vertexCount();
     withFlags([&](auto friction) {
-      teamFor((n + 3) / 4, [&](Index b, Index e) {
-        respondContacts<friction()>(4 * b, std::min(4 * e, n), passes_.contacts(), x, xPrev_.data(), v, h, damping,
+      teamFor((n + 7) / 8, [&](Index b, Index e) {
+        respondContacts<friction()>(8 * b, std::min(8 * e, n), passes_.contacts(), x, xPrev_.data(), v, h, damping,
                                     level);
       });
     }, hasFriction_);

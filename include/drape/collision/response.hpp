@@ -753,6 +753,93 @@ inline void respondFour(Index i, ContactBuffer<float>& contacts, Vec3<float>* x,
   _mm_storeu_ps(contacts.normalDv.data() + i, _mm_add_ps(zero, _mm_max_ps(zero, _mm_sub_ps(vnNew, vn))));
 }
 
+#if DRAPE_AVX2
+#define DRAPE_TARGET_AVX2 __attribute__((target("avx2")))
+DRAPE_TARGET_AVX2 inline __m256 join(__m128 lo, __m128 hi) {
+  return _mm256_insertf128_ps(_mm256_castps128_ps256(lo), hi, 1);
+}
+DRAPE_TARGET_AVX2 inline void loadVec3Eight(const Vec3<float>* p, __m256& ax, __m256& ay, __m256& az) {
+  __m128 lx, ly, lz, hx, hy, hz;
+  loadVec3Four(p, lx, ly, lz);
+  loadVec3Four(p + 4, hx, hy, hz);
+  ax = join(lx, hx), ay = join(ly, hy), az = join(lz, hz);
+}
+DRAPE_TARGET_AVX2 inline void storeVec3Eight(Vec3<float>* p, __m256 ax, __m256 ay, __m256 az) {
+  storeVec3Four(p, _mm256_castps256_ps128(ax), _mm256_castps256_ps128(ay), _mm256_castps256_ps128(az));
+  storeVec3Four(p + 4, _mm256_extractf128_ps(ax, 1), _mm256_extractf128_ps(ay, 1), _mm256_extractf128_ps(az, 1));
+}
+DRAPE_TARGET_AVX2 inline __m256 dotEight(__m256 ax, __m256 ay, __m256 az, __m256 bx, __m256 by, __m256 bz) {
+  return _mm256_add_ps(_mm256_mul_ps(ax, bx), _mm256_add_ps(_mm256_mul_ps(ay, by), _mm256_mul_ps(az, bz)));
+}
+
+/// respondFour for vertices i .. i + 7, eight lanes at once (AVX2, without FMA, so the same bits): where the
+/// processor has it, two fours' waits on their square roots and divisions become one.
+template <bool kFriction>
+DRAPE_TARGET_AVX2 inline void respondEight(Index i, ContactBuffer<float>& contacts, Vec3<float>* x,
+                                                         const Vec3<float>* xPrev, Vec3<float>* v, float h,
+                                                         float invH, float normalDamping) {
+  // The slots' rows as in respondFour, four vertices per transpose.
+  __m128 r[2][8];
+  float muDyn[8];
+  for (int half = 0; half < 2; ++half) {
+    const float* s[4];
+    for (int k = 0; k < 4; ++k) s[k] = reinterpret_cast<const float*>(contacts.slots[i + 4 * half + k].data());
+    for (int k = 0; k < 4; ++k) muDyn[4 * half + k] = s[k][8];
+    __m128* q = r[half];
+    q[0] = _mm_loadu_ps(s[0]), q[1] = _mm_loadu_ps(s[1]), q[2] = _mm_loadu_ps(s[2]), q[3] = _mm_loadu_ps(s[3]);
+    _MM_TRANSPOSE4_PS(q[0], q[1], q[2], q[3]);
+    q[4] = _mm_loadu_ps(s[0] + 4), q[5] = _mm_loadu_ps(s[1] + 4), q[6] = _mm_loadu_ps(s[2] + 4);
+    q[7] = _mm_loadu_ps(s[3] + 4);
+    _MM_TRANSPOSE4_PS(q[4], q[5], q[6], q[7]);
+  }
+  const __m256 nx = join(r[0][0], r[1][0]), ny = join(r[0][1], r[1][1]), nz = join(r[0][2], r[1][2]);
+  const __m256 cx = join(r[0][3], r[1][3]), cy = join(r[0][4], r[1][4]), cz = join(r[0][5], r[1][5]);
+  const __m256 dn = join(r[0][6], r[1][6]), muS = join(r[0][7], r[1][7]);
+  __m256 vx, vy, vz;
+  loadVec3Eight(v + i, vx, vy, vz);
+  const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);
+  const __m256 rx = _mm256_sub_ps(vx, cx), ry = _mm256_sub_ps(vy, cy), rz = _mm256_sub_ps(vz, cz);
+  const __m256 vn = dotEight(nx, ny, nz, rx, ry, rz);
+  __m256 tx = _mm256_sub_ps(rx, _mm256_mul_ps(vn, nx)), ty = _mm256_sub_ps(ry, _mm256_mul_ps(vn, ny)),
+         tz = _mm256_sub_ps(rz, _mm256_mul_ps(vn, nz));
+  const __m256 vnNew =
+      _mm256_andnot_ps(_mm256_cmp_ps(vn, zero, _CMP_LT_OS), _mm256_mul_ps(vn, _mm256_set1_ps(1.0f - normalDamping)));
+  if constexpr (kFriction) {
+    const __m256 slideLimit = _mm256_mul_ps(_mm256_loadu_ps(muDyn), dn);
+    const __m256 speed = _mm256_sqrt_ps(dotEight(tx, ty, tz, tx, ty, tz));
+    const __m256 slow = _mm256_mul_ps(slideLimit, _mm256_set1_ps(invH));
+    const __m256 fast = _mm256_cmp_ps(speed, slow, _CMP_GT_OS);
+    const __m256 keep =
+        _mm256_and_ps(fast, _mm256_div_ps(_mm256_sub_ps(speed, slow), _mm256_blendv_ps(one, speed, fast)));
+    __m256 px, py, pz, qx, qy, qz;
+    loadVec3Eight(x + i, px, py, pz);
+    loadVec3Eight(xPrev + i, qx, qy, qz);
+    const __m256 hv = _mm256_set1_ps(h);
+    const __m256 dx = _mm256_sub_ps(_mm256_sub_ps(px, qx), _mm256_mul_ps(hv, cx));
+    const __m256 dy = _mm256_sub_ps(_mm256_sub_ps(py, qy), _mm256_mul_ps(hv, cy));
+    const __m256 dz = _mm256_sub_ps(_mm256_sub_ps(pz, qz), _mm256_mul_ps(hv, cz));
+    const __m256 dd = dotEight(nx, ny, nz, dx, dy, dz);
+    const __m256 ex = _mm256_sub_ps(dx, _mm256_mul_ps(dd, nx)), ey = _mm256_sub_ps(dy, _mm256_mul_ps(dd, ny)),
+                 ez = _mm256_sub_ps(dz, _mm256_mul_ps(dd, nz));
+    const __m256 slip = _mm256_sqrt_ps(dotEight(ex, ey, ez, ex, ey, ez));
+    const __m256 stick = _mm256_cmp_ps(slip, _mm256_mul_ps(muS, dn), _CMP_LE_OS);
+    const __m256 undo = _mm256_blendv_ps(
+        _mm256_min_ps(_mm256_div_ps(slideLimit, _mm256_blendv_ps(slip, one, stick)), one), one, stick);
+    storeVec3Eight(x + i, _mm256_sub_ps(px, _mm256_mul_ps(undo, ex)), _mm256_sub_ps(py, _mm256_mul_ps(undo, ey)),
+              _mm256_sub_ps(pz, _mm256_mul_ps(undo, ez)));
+    tx = _mm256_andnot_ps(stick, _mm256_mul_ps(tx, keep));
+    ty = _mm256_andnot_ps(stick, _mm256_mul_ps(ty, keep));
+    tz = _mm256_andnot_ps(stick, _mm256_mul_ps(tz, keep));
+  }
+  storeVec3Eight(v + i, _mm256_add_ps(_mm256_add_ps(cx, _mm256_mul_ps(vnNew, nx)), tx),
+            _mm256_add_ps(_mm256_add_ps(cy, _mm256_mul_ps(vnNew, ny)), ty),
+            _mm256_add_ps(_mm256_add_ps(cz, _mm256_mul_ps(vnNew, nz)), tz));
+  _mm256_storeu_ps(contacts.normalDv.data() + i,
+                   _mm256_add_ps(zero, _mm256_max_ps(zero, _mm256_sub_ps(vnNew, vn))));
+}
+#undef DRAPE_TARGET_AVX2
+#endif
+
 }  // namespace detail
 #endif
 
@@ -770,11 +857,22 @@ void respondContacts(Index begin, Index end, ContactBuffer<S>& contacts, Vec3<S>
   for (Index i = begin; i < end; ++i) {
 #if DRAPE_SSE2
     if constexpr (std::is_same_v<S, float>) {
-      // Four at a time where i is a multiple of four (so the same vertices whatever the threads' shares) and
-      // all four touch one surface each.
-      if (level != SimdLevel::Scalar && i % 4 == 0 && i + 4 <= end && contacts.live(i) && contacts.live(i + 1) &&
-          contacts.live(i + 2) && contacts.live(i + 3) && contacts.slotCount[i] == 1 &&
-          contacts.slotCount[i + 1] == 1 && contacts.slotCount[i + 2] == 1 && contacts.slotCount[i + 3] == 1) {
+      // Eight or four at a time where i is a multiple of that (so the same vertices whatever the threads'
+      // shares) and each of them touches one surface.
+      auto oneSurface = [&](Index first, Index count) {
+        if (i % count != 0 || first + count > end) return false;
+        for (Index j = first; j < first + count; ++j)
+          if (!contacts.live(j) || contacts.slotCount[j] != 1) return false;
+        return true;
+      };
+#if DRAPE_AVX2
+      if (level == SimdLevel::Avx2 && oneSurface(i, 8)) {
+        detail::respondEight<kFriction>(i, contacts, x, xPrev, v, h, invH, normalDamping);
+        i += 7;
+        continue;
+      }
+#endif
+      if (level != SimdLevel::Scalar && oneSurface(i, 4)) {
         detail::respondFour<kFriction>(i, contacts, x, xPrev, v, h, invH, normalDamping);
         i += 3;
         continue;
