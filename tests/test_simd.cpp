@@ -250,3 +250,72 @@ TEST_CASE("the four- and eight-lane contact responses give the scalar response's
     }
   }
 }
+
+TEMPLATE_TEST_CASE("a plane's four-lane vertex test gives the scalar test's bits", "[simd][contacts]", float, double) {
+  // The same vertices through the pass once as all items (a float plane's test takes aligned fours) and once
+  // as a list of the same indices (always the scalar loop).
+  using S = TestType;
+  using V = drape::Vec3<S>;
+  const Index n = 203;
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  drape::Solid<drape::Plane> plane;
+  plane.pose.rotation = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), Eigen::Vector3d(0.3, -0.2, 1.0));
+  plane.pose.position = Eigen::Vector3d(0.1, 0.2, 0.05);
+  plane.motion = drape::Motion::Kinematic;  // a moving plane: its velocity at each contact is recorded
+  plane.staticFriction = 0.4;
+  plane.dynamicFriction = 0.3;
+  plane.linearVelocity = Eigen::Vector3d(0.2, -0.1, 0.05);
+  plane.angularVelocity = Eigen::Vector3d(0.5, 1.0, -2.0);
+  const auto solid = drape::detail::compileSolid<drape::Plane, S>(plane, Eigen::Vector3d::Zero());
+  const S thickness = S(0.005), slack = S(1e-4);
+  std::vector<V> x0(n);
+  std::vector<S> w(n);
+  std::vector<Index> list(n);
+  for (Index i = 0; i < n; ++i) {
+    // Heights from 2 cm below to 2 cm above the plane: about half within the thickness.
+    const V along(S(u(rng)), S(u(rng)), S(u(rng)));
+    const S height = S(0.02 * u(rng));
+    x0[i] = along - (solid.sdf.normal.dot(along) - solid.sdf.offset - height) * solid.sdf.normal;
+    w[i] = i % 9 == 4 ? S(0) : S(1);  // every ninth pinned: never moved
+    list[i] = i;
+  }
+  x0[7] -= (solid.sdf.normal.dot(x0[7]) - solid.sdf.offset - S(0.001)) * solid.sdf.normal;  // inside (see below)
+  auto run = [&](bool all, std::vector<V>& x, drape::ContactBuffer<S>& contacts) {
+    x = x0;
+    contacts.resize(n);
+    contacts.begin();
+    // A vertex already in contact with another surface this substep: the plane's contact joins it.
+    contacts.template record<false>(7, x[7], V(1, 0, 0), S(1e-3), solid.motion, x[7], V::Zero());
+    drape::VertexPassShare<S> share;
+    for (Index begin = 0; begin < n; begin += 50) {  // shares of 50, as threads might take them
+      const Index end = std::min(begin + 50, n);
+      const auto part = all ? drape::projectVertexContacts(begin, end, solid, thickness, x.data(), w.data(),
+                                                           drape::AllItems{}, contacts, x0.data(), slack)
+                            : drape::projectVertexContacts(begin, end, solid, thickness, x.data(), w.data(),
+                                                           drape::ItemList{list.data()}, contacts, x0.data(), slack);
+      share.found += part.found;
+      share.moved = std::max(share.moved, part.moved);
+    }
+    return share;
+  };
+  std::vector<V> xa, xl;
+  drape::ContactBuffer<S> ca, cl;
+  const auto sa = run(true, xa, ca), sl = run(false, xl, cl);
+  CHECK(sa.found > n / 4);
+  CHECK(sa.found < n - n / 4);
+  CHECK(sa.found == sl.found);
+  CHECK(std::memcmp(&sa.moved, &sl.moved, sizeof(S)) == 0);
+  CHECK(std::memcmp(xa.data(), xl.data(), n * sizeof(V)) == 0);
+  int differing = 0;
+  for (Index i = 0; i < n; ++i) {
+    if (ca.live(i) != cl.live(i) || ca.slotCount[i] != cl.slotCount[i]) {
+      ++differing;
+      continue;
+    }
+    for (int k = 0; k < ca.slotCount[i]; ++k)
+      if (std::memcmp(&ca.slots[i][k], &cl.slots[i][k], sizeof(drape::ContactSlot<S>)) != 0) ++differing;
+  }
+  CHECK(differing == 0);
+  CHECK(cl.slotCount[7] == 2);  // the earlier surface kept its slot
+}

@@ -297,6 +297,57 @@ template <Scalar S> struct VertexPassShare {
   S moved = 0;
 };
 
+#if DRAPE_SSE2
+namespace detail {
+
+/// The vertex test of projectVertexContactsAs against a plane for vertices i .. i + 3, lane by lane the scalar
+/// loop's operations in its order (so its bits): phi, the move out to the thickness and the plane's velocity
+/// there in four lanes; each vertex that moved is then recorded as the scalar loop records it.
+template <bool kBody>
+inline void planeVertexFour(Index i, const CompiledSolid<Plane, float>& solid, float limit, float thickness,
+                            Vec3<float>* x, const float* invMass, ContactBuffer<float>& contacts,
+                            const Vec3<float>* binned, VertexPassShare<float>& share, float& moved) {
+  const Sdf<Plane, float>& plane = solid.sdf;
+  const __m128 nx = _mm_set1_ps(plane.normal.x()), ny = _mm_set1_ps(plane.normal.y()),
+               nz = _mm_set1_ps(plane.normal.z());
+  __m128 px, py, pz;
+  loadVec3Four(x + i, px, py, pz);
+  const __m128 phi = _mm_sub_ps(dotFour(nx, ny, nz, px, py, pz), _mm_set1_ps(plane.offset));
+  // Free (inverse mass not 0) and not phi >= limit (a NaN phi counts as inside, as in the scalar loop).
+  const __m128 hit = _mm_andnot_ps(_mm_cmpeq_ps(_mm_loadu_ps(invMass + i), _mm_setzero_ps()),
+                                   _mm_cmpnge_ps(phi, _mm_set1_ps(limit)));
+  const int lanes = _mm_movemask_ps(hit);
+  if (lanes == 0) return;
+  const __m128 dn = _mm_sub_ps(_mm_set1_ps(thickness), phi);
+  const __m128 qx = _mm_add_ps(px, _mm_mul_ps(dn, nx)), qy = _mm_add_ps(py, _mm_mul_ps(dn, ny)),
+               qz = _mm_add_ps(pz, _mm_mul_ps(dn, nz));
+  storeVec3Four(x + i, select(hit, qx, px), select(hit, qy, py), select(hit, qz, pz));
+  // velocityAt: linearVelocity + w x (x - centre), written out as SolidMotion::spin is.
+  const SolidMotion<float>& m = solid.motion;
+  const Vec3<float>& w = m.angularVelocity;
+  const __m128 dx = _mm_sub_ps(qx, _mm_set1_ps(m.centre.x())), dy = _mm_sub_ps(qy, _mm_set1_ps(m.centre.y())),
+               dz = _mm_sub_ps(qz, _mm_set1_ps(m.centre.z()));
+  const __m128 wx = _mm_set1_ps(w.x()), wy = _mm_set1_ps(w.y()), wz = _mm_set1_ps(w.z());
+  alignas(16) float out[7][4];
+  _mm_store_ps(out[0], qx), _mm_store_ps(out[1], qy), _mm_store_ps(out[2], qz), _mm_store_ps(out[3], dn);
+  _mm_store_ps(out[4], _mm_add_ps(_mm_set1_ps(m.linearVelocity.x()),
+                                  _mm_sub_ps(_mm_mul_ps(wy, dz), _mm_mul_ps(wz, dy))));
+  _mm_store_ps(out[5], _mm_add_ps(_mm_set1_ps(m.linearVelocity.y()),
+                                  _mm_sub_ps(_mm_mul_ps(wz, dx), _mm_mul_ps(wx, dz))));
+  _mm_store_ps(out[6], _mm_add_ps(_mm_set1_ps(m.linearVelocity.z()),
+                                  _mm_sub_ps(_mm_mul_ps(wx, dy), _mm_mul_ps(wy, dx))));
+  for (int l = 0; l < 4; ++l) {
+    if (!(lanes & (1 << l))) continue;
+    const Vec3<float> q(out[0][l], out[1][l], out[2][l]), vc(out[4][l], out[5][l], out[6][l]);
+    contacts.template record<kBody>(i + l, q, plane.normal, out[3][l], m, q, vc);
+    moved = std::max(moved, (q - binned[i + l]).squaredNorm());
+    ++share.found;
+  }
+}
+
+}  // namespace detail
+#endif
+
 /// Moves every free vertex of ids[begin, end) closer than `thickness` (by more than `slack`) out along the
 /// normal and records the contact. Without a broad phase, `binned` is the positions themselves.
 ///
@@ -315,6 +366,20 @@ VertexPassShare<S> projectVertexContactsAs(Index begin, Index end, const Compile
   VertexPassShare<S> share;
   S moved = 0;
   for (Index k = begin; k < end; ++k) {
+#if DRAPE_SSE2
+    // A plane's test four vertices at a time where the vertices are consecutive, k is a multiple of four (the
+    // same vertices on any number of threads) and nothing is swept: most vertices of a cloth lying on the floor
+    // or a slope are in contact, and the test and the move are the same few operations for each.
+    if constexpr (std::is_same_v<S, float> && std::is_same_v<Shape, Plane> && std::is_same_v<Ids, AllItems> &&
+                  !kSweep && !kKeepTurn) {
+      if (k % 4 == 0 && k + 4 <= end) {
+        detail::planeVertexFour<kBody>(k, solid, thickness - slack, thickness, x, invMass, contacts, binned, share,
+                                       moved);
+        k += 3;
+        continue;
+      }
+    }
+#endif
     const Index i = ids[k];
     if (invMass[i] == S(0)) continue;
     [[maybe_unused]] Vec3<S> start = x[i];  // kKeepTurn: where the last move started
@@ -672,30 +737,6 @@ DRAPE_ALWAYS_INLINE bool applyPositionFriction(const ContactSlot<S>& c, Vec3<S>&
 
 #if DRAPE_SSE2
 namespace detail {
-
-/// Four consecutive Vec3<float> (12 floats) as three registers, one per coordinate, and back.
-inline void loadVec3Four(const Vec3<float>* p, __m128& vx, __m128& vy, __m128& vz) {
-  const float* f = p->data();
-  const __m128 a = _mm_loadu_ps(f), b = _mm_loadu_ps(f + 4), c = _mm_loadu_ps(f + 8);  // x0y0z0x1 y1z1x2y2 z2x3y3z3
-  vx = _mm_shuffle_ps(a, _mm_shuffle_ps(b, c, _MM_SHUFFLE(1, 0, 3, 2)), _MM_SHUFFLE(3, 0, 3, 0));
-  vy = _mm_shuffle_ps(_mm_shuffle_ps(a, b, _MM_SHUFFLE(0, 0, 1, 1)), _mm_shuffle_ps(b, c, _MM_SHUFFLE(2, 2, 3, 3)),
-                      _MM_SHUFFLE(2, 0, 2, 0));
-  vz = _mm_shuffle_ps(_mm_shuffle_ps(a, b, _MM_SHUFFLE(1, 1, 2, 2)), _mm_shuffle_ps(c, c, _MM_SHUFFLE(3, 3, 0, 0)),
-                      _MM_SHUFFLE(2, 0, 2, 0));
-}
-inline void storeVec3Four(Vec3<float>* p, __m128 vx, __m128 vy, __m128 vz) {
-  float* f = p->data();
-  _mm_storeu_ps(f, _mm_shuffle_ps(_mm_unpacklo_ps(vx, vy), _mm_shuffle_ps(vz, vx, _MM_SHUFFLE(1, 1, 0, 0)),
-                                  _MM_SHUFFLE(2, 0, 1, 0)));
-  _mm_storeu_ps(f + 4, _mm_shuffle_ps(_mm_shuffle_ps(vy, vz, _MM_SHUFFLE(1, 1, 1, 1)),
-                                      _mm_shuffle_ps(vx, vy, _MM_SHUFFLE(2, 2, 2, 2)), _MM_SHUFFLE(2, 0, 2, 0)));
-  _mm_storeu_ps(f + 8, _mm_shuffle_ps(_mm_shuffle_ps(vz, vx, _MM_SHUFFLE(3, 3, 2, 2)),
-                                      _mm_shuffle_ps(vy, vz, _MM_SHUFFLE(3, 3, 3, 3)), _MM_SHUFFLE(2, 0, 2, 0)));
-}
-/// Eigen's order for a 3-vector's dot product: a0 b0 + (a1 b1 + a2 b2).
-inline __m128 dotFour(__m128 ax, __m128 ay, __m128 az, __m128 bx, __m128 by, __m128 bz) {
-  return _mm_add_ps(_mm_mul_ps(ax, bx), _mm_add_ps(_mm_mul_ps(ay, by), _mm_mul_ps(az, bz)));
-}
 
 /// respondContacts for vertices i .. i + 3, each live with one contact slot: lane by lane the scalar loop's
 /// operations in its order (so its bits), four vertices at a time. A vertex's friction waits on two square roots

@@ -54,6 +54,30 @@ template <Scalar S> SimdLevel simdLevelFor(SimdLevel level) {
 namespace detail {
 /// (m ? a : b) lane by lane, from a comparison mask.
 inline __m128 select(__m128 m, __m128 a, __m128 b) { return _mm_or_ps(_mm_and_ps(m, a), _mm_andnot_ps(m, b)); }
+
+/// Four consecutive Vec3<float> (12 floats) as three registers, one per coordinate, and back.
+inline void loadVec3Four(const Vec3<float>* p, __m128& vx, __m128& vy, __m128& vz) {
+  const float* f = p->data();
+  const __m128 a = _mm_loadu_ps(f), b = _mm_loadu_ps(f + 4), c = _mm_loadu_ps(f + 8);  // x0y0z0x1 y1z1x2y2 z2x3y3z3
+  vx = _mm_shuffle_ps(a, _mm_shuffle_ps(b, c, _MM_SHUFFLE(1, 0, 3, 2)), _MM_SHUFFLE(3, 0, 3, 0));
+  vy = _mm_shuffle_ps(_mm_shuffle_ps(a, b, _MM_SHUFFLE(0, 0, 1, 1)), _mm_shuffle_ps(b, c, _MM_SHUFFLE(2, 2, 3, 3)),
+                      _MM_SHUFFLE(2, 0, 2, 0));
+  vz = _mm_shuffle_ps(_mm_shuffle_ps(a, b, _MM_SHUFFLE(1, 1, 2, 2)), _mm_shuffle_ps(c, c, _MM_SHUFFLE(3, 3, 0, 0)),
+                      _MM_SHUFFLE(2, 0, 2, 0));
+}
+inline void storeVec3Four(Vec3<float>* p, __m128 vx, __m128 vy, __m128 vz) {
+  float* f = p->data();
+  _mm_storeu_ps(f, _mm_shuffle_ps(_mm_unpacklo_ps(vx, vy), _mm_shuffle_ps(vz, vx, _MM_SHUFFLE(1, 1, 0, 0)),
+                                  _MM_SHUFFLE(2, 0, 1, 0)));
+  _mm_storeu_ps(f + 4, _mm_shuffle_ps(_mm_shuffle_ps(vy, vz, _MM_SHUFFLE(1, 1, 1, 1)),
+                                      _mm_shuffle_ps(vx, vy, _MM_SHUFFLE(2, 2, 2, 2)), _MM_SHUFFLE(2, 0, 2, 0)));
+  _mm_storeu_ps(f + 8, _mm_shuffle_ps(_mm_shuffle_ps(vz, vx, _MM_SHUFFLE(3, 3, 2, 2)),
+                                      _mm_shuffle_ps(vy, vz, _MM_SHUFFLE(3, 3, 3, 3)), _MM_SHUFFLE(2, 0, 2, 0)));
+}
+/// Eigen's order for a 3-vector's dot product: a0 b0 + (a1 b1 + a2 b2).
+inline __m128 dotFour(__m128 ax, __m128 ay, __m128 az, __m128 bx, __m128 by, __m128 bz) {
+  return _mm_add_ps(_mm_mul_ps(ax, bx), _mm_add_ps(_mm_mul_ps(ay, by), _mm_mul_ps(az, bz)));
+}
 }  // namespace detail
 #endif
 
