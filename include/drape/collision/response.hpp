@@ -328,19 +328,43 @@ inline void planeVertexFour(Index i, const CompiledSolid<Plane, float>& solid, f
   const __m128 dx = _mm_sub_ps(qx, _mm_set1_ps(m.centre.x())), dy = _mm_sub_ps(qy, _mm_set1_ps(m.centre.y())),
                dz = _mm_sub_ps(qz, _mm_set1_ps(m.centre.z()));
   const __m128 wx = _mm_set1_ps(w.x()), wy = _mm_set1_ps(w.y()), wz = _mm_set1_ps(w.z());
-  alignas(16) float out[7][4];
-  _mm_store_ps(out[0], qx), _mm_store_ps(out[1], qy), _mm_store_ps(out[2], qz), _mm_store_ps(out[3], dn);
-  _mm_store_ps(out[4], _mm_add_ps(_mm_set1_ps(m.linearVelocity.x()),
-                                  _mm_sub_ps(_mm_mul_ps(wy, dz), _mm_mul_ps(wz, dy))));
-  _mm_store_ps(out[5], _mm_add_ps(_mm_set1_ps(m.linearVelocity.y()),
-                                  _mm_sub_ps(_mm_mul_ps(wz, dx), _mm_mul_ps(wx, dz))));
-  _mm_store_ps(out[6], _mm_add_ps(_mm_set1_ps(m.linearVelocity.z()),
-                                  _mm_sub_ps(_mm_mul_ps(wx, dy), _mm_mul_ps(wy, dx))));
+  const __m128 vcx = _mm_add_ps(_mm_set1_ps(m.linearVelocity.x()), _mm_sub_ps(_mm_mul_ps(wy, dz), _mm_mul_ps(wz, dy)));
+  const __m128 vcy = _mm_add_ps(_mm_set1_ps(m.linearVelocity.y()), _mm_sub_ps(_mm_mul_ps(wz, dx), _mm_mul_ps(wx, dz)));
+  const __m128 vcz = _mm_add_ps(_mm_set1_ps(m.linearVelocity.z()), _mm_sub_ps(_mm_mul_ps(wx, dy), _mm_mul_ps(wy, dx)));
+  // The largest squared move from the binned positions, Eigen's order (x^2 + (y^2 + z^2)); 0 in lanes not moved.
+  __m128 bx, by, bz;
+  loadVec3Four(binned + i, bx, by, bz);
+  const __m128 ex = _mm_sub_ps(qx, bx), ey = _mm_sub_ps(qy, by), ez = _mm_sub_ps(qz, bz);
+  alignas(16) float far[4];
+  _mm_store_ps(far, _mm_and_ps(hit, dotFour(ex, ey, ez, ex, ey, ez)));
+  // A first contact's slot as ContactBuffer::record writes it, its first eight fields transposed from the lanes.
+  __m128 a0 = nx, a1 = ny, a2 = nz, a3 = vcx;
+  _MM_TRANSPOSE4_PS(a0, a1, a2, a3);
+  __m128 b0 = vcy, b1 = vcz, b2 = dn, b3 = _mm_set1_ps(m.staticFriction);
+  _MM_TRANSPOSE4_PS(b0, b1, b2, b3);
+  const __m128 rowA[4] = {a0, a1, a2, a3}, rowB[4] = {b0, b1, b2, b3};
+  alignas(16) float offset[4], lane[7][4];
+  _mm_store_ps(offset, dotFour(nx, ny, nz, qx, qy, qz));
+  _mm_store_ps(lane[0], qx), _mm_store_ps(lane[1], qy), _mm_store_ps(lane[2], qz), _mm_store_ps(lane[3], dn);
+  _mm_store_ps(lane[4], vcx), _mm_store_ps(lane[5], vcy), _mm_store_ps(lane[6], vcz);
   for (int l = 0; l < 4; ++l) {
     if (!(lanes & (1 << l))) continue;
-    const Vec3<float> q(out[0][l], out[1][l], out[2][l]), vc(out[4][l], out[5][l], out[6][l]);
-    contacts.template record<kBody>(i + l, q, plane.normal, out[3][l], m, q, vc);
-    moved = std::max(moved, (q - binned[i + l]).squaredNorm());
+    const Index j = i + l;
+    if (!kBody && contacts.stamp[j] != contacts.current) {
+      contacts.stamp[j] = contacts.current;
+      contacts.slotCount[j] = 1;
+      ContactSlot<float>& slot = contacts.slots[j][0];
+      float* f = reinterpret_cast<float*>(&slot);
+      _mm_storeu_ps(f, rowA[l]);
+      _mm_storeu_ps(f + 4, rowB[l]);
+      slot.dynamicFriction = m.dynamicFriction;
+      slot.offset = offset[l];
+      slot.body = m.body;
+    } else {
+      const Vec3<float> q(lane[0][l], lane[1][l], lane[2][l]), vc(lane[4][l], lane[5][l], lane[6][l]);
+      contacts.template record<kBody>(j, q, plane.normal, lane[3][l], m, q, vc);
+    }
+    moved = std::max(moved, far[l]);
     ++share.found;
   }
 }
