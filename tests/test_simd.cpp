@@ -167,7 +167,8 @@ TEMPLATE_TEST_CASE("a vertex pinned or freed between steps is solved with its ne
 }
 
 TEST_CASE("the four- and eight-lane contact responses give the scalar response's bits", "[simd][contacts]") {
-  if (drape::bestSimdLevel() < SimdLevel::Avx2) WARN("this processor lacks AVX2: the eight-lane response is not compared");
+  if (drape::bestSimdLevel() < SimdLevel::Avx2)
+    WARN("this processor lacks AVX2: the eight-lane response is not compared");
   if (drape::bestSimdLevel() < SimdLevel::Sse2) WARN("this build has no SSE2: only the scalar response runs");
   if (kFusedBuild) WARN("a build with FMA: the responses are compared to rounding, not bit for bit");
   using V = drape::Vec3<float>;

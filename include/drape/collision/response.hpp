@@ -301,12 +301,14 @@ template <Scalar S> struct VertexPassShare {
 namespace detail {
 
 /// The vertex test of projectVertexContactsAs against a plane for vertices i .. i + 3, lane by lane the scalar
-/// loop's operations in its order (so its bits): phi, the move out to the thickness and the plane's velocity
-/// there in four lanes; each vertex that moved is then recorded as the scalar loop records it.
+/// loop's operations in its order (so its bits): phi, the move out to the thickness, the plane's velocity there
+/// and the move from the binned position in four lanes. A vertex's first contact of the substep is written from
+/// the lanes as ContactBuffer::record writes it; a further one (and a coupled body's) goes through record.
 template <bool kBody>
 inline void planeVertexFour(Index i, const CompiledSolid<Plane, float>& solid, float limit, float thickness,
                             Vec3<float>* x, const float* invMass, ContactBuffer<float>& contacts,
                             const Vec3<float>* binned, VertexPassShare<float>& share, float& moved) {
+  static_assert(sizeof(ContactSlot<float>) == 11 * sizeof(float), "ContactSlot<float> is written as 11 floats");
   const Sdf<Plane, float>& plane = solid.sdf;
   const __m128 nx = _mm_set1_ps(plane.normal.x()), ny = _mm_set1_ps(plane.normal.y()),
                nz = _mm_set1_ps(plane.normal.z());
@@ -841,8 +843,8 @@ DRAPE_TARGET_AVX2 inline __m256 dotEight(__m256 ax, __m256 ay, __m256 az, __m256
 /// processor has it, two fours' waits on their square roots and divisions become one.
 template <bool kFriction>
 DRAPE_TARGET_AVX2 inline void respondEight(Index i, ContactBuffer<float>& contacts, Vec3<float>* x,
-                                                         const Vec3<float>* xPrev, Vec3<float>* v, float h,
-                                                         float invH, float normalDamping) {
+                                           const Vec3<float>* xPrev, Vec3<float>* v, float h, float invH,
+                                           float normalDamping) {
   // The slots' rows as in respondFour, four vertices per transpose.
   __m128 r[2][8];
   float muDyn[8];
@@ -891,16 +893,15 @@ DRAPE_TARGET_AVX2 inline void respondEight(Index i, ContactBuffer<float>& contac
     const __m256 undo = _mm256_blendv_ps(
         _mm256_min_ps(_mm256_div_ps(slideLimit, _mm256_blendv_ps(slip, one, stick)), one), one, stick);
     storeVec3Eight(x + i, _mm256_sub_ps(px, _mm256_mul_ps(undo, ex)), _mm256_sub_ps(py, _mm256_mul_ps(undo, ey)),
-              _mm256_sub_ps(pz, _mm256_mul_ps(undo, ez)));
+                   _mm256_sub_ps(pz, _mm256_mul_ps(undo, ez)));
     tx = _mm256_andnot_ps(stick, _mm256_mul_ps(tx, keep));
     ty = _mm256_andnot_ps(stick, _mm256_mul_ps(ty, keep));
     tz = _mm256_andnot_ps(stick, _mm256_mul_ps(tz, keep));
   }
   storeVec3Eight(v + i, _mm256_add_ps(_mm256_add_ps(cx, _mm256_mul_ps(vnNew, nx)), tx),
-            _mm256_add_ps(_mm256_add_ps(cy, _mm256_mul_ps(vnNew, ny)), ty),
-            _mm256_add_ps(_mm256_add_ps(cz, _mm256_mul_ps(vnNew, nz)), tz));
-  _mm256_storeu_ps(contacts.normalDv.data() + i,
-                   _mm256_add_ps(zero, _mm256_max_ps(zero, _mm256_sub_ps(vnNew, vn))));
+                 _mm256_add_ps(_mm256_add_ps(cy, _mm256_mul_ps(vnNew, ny)), ty),
+                 _mm256_add_ps(_mm256_add_ps(cz, _mm256_mul_ps(vnNew, nz)), tz));
+  _mm256_storeu_ps(contacts.normalDv.data() + i, _mm256_add_ps(zero, _mm256_max_ps(zero, _mm256_sub_ps(vnNew, vn))));
 }
 #undef DRAPE_TARGET_AVX2
 #endif
@@ -914,7 +915,8 @@ DRAPE_TARGET_AVX2 inline void respondEight(Index i, ContactBuffer<float>& contac
 /// (applyPositionFriction); a stuck vertex keeps no tangential velocity, a sliding one loses dynamicFriction * dn / h
 /// of its tangential speed, the same as its position lost, so a slip never carries on as velocity what friction took
 /// from the position (that mismatch makes a stuck cloth crawl downhill in stick-slip waves). kFriction false (no solid
-/// of the scene has friction) compiles the friction out.
+/// of the scene has friction) compiles the friction out. `level` (simdLevelFor) lets float take eight or four
+/// contact vertices at a time in SIMD lanes, with the same bits; Scalar keeps to the loop.
 template <bool kFriction, Scalar S>
 void respondContacts(Index begin, Index end, ContactBuffer<S>& contacts, Vec3<S>* x, const Vec3<S>* xPrev,
                      Vec3<S>* v, S h, S normalDamping, SimdLevel level = SimdLevel::Scalar) {
