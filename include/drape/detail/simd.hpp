@@ -24,8 +24,8 @@
 namespace drape {
 
 /// The widest kernel the build and the processor allow, or a narrower one on request (tests compare them,
-/// benches time them): Scalar is one item at a time, Sse2 four, Avx2 eight (constraints; the contact response
-/// takes four at either). Double always runs the scalar kernel.
+/// benches time them): Scalar is one item at a time, Sse2 four, Avx2 eight (constraints and the contact response;
+/// a plane's vertex test takes four at either). Double always runs the scalar kernel.
 enum class SimdLevel { Scalar, Sse2, Avx2 };
 
 /// The widest level this build can run here (checked once).
