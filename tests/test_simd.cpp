@@ -328,3 +328,89 @@ TEMPLATE_TEST_CASE("a plane's four-lane vertex test gives the scalar test's bits
   CHECK(differing == 0);
   CHECK(cl.slotCount[7] == 2);  // the earlier surface kept its slot
 }
+
+TEST_CASE("the four-lane prediction and velocity update give the scalar loops' bits", "[simd]") {
+  if (drape::bestSimdLevel() < SimdLevel::Sse2) WARN("this build has no SSE2: only the scalar loops run");
+  if (kFusedBuild) WARN("a build with FMA: the loops are compared to rounding, not bit for bit");
+  using V = drape::Vec3<float>;
+  using P = drape::Vec4<float>;
+  const Index n = 203;  // a partial four at the end
+  std::mt19937 rng(29);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  std::vector<V> x(n), v0(n), reference(n);
+  std::vector<float> w(n);
+  std::vector<P> solved(n);
+  for (Index i = 0; i < n; ++i) {
+    x[i] = 0.01f * V(u(rng), u(rng), u(rng));  // near the origin, where a last bit of a move shows
+    v0[i] = V(u(rng), u(rng), u(rng));
+    w[i] = i % 9 == 4 ? 0.0f : 1.0f + u(rng);  // every ninth pinned: neither moved nor accelerated
+    solved[i] = P(x[i].x() + 1e-3f * u(rng), x[i].y() + 1e-3f * u(rng), x[i].z() + 1e-3f * u(rng), 0.0f);
+  }
+  const V gh(0.3f, -0.2f, -9.81f / 300.0f);
+  const float h = 1.0f / 300.0f, keep = 0.997f;
+  auto agree = [](const auto& a, const auto& b) {
+    if (!kFusedBuild) return std::memcmp(a.data(), b.data(), a.size() * sizeof(a[0])) == 0;
+    for (std::size_t i = 0; i < a.size(); ++i)
+      if ((a[i] - b[i]).cwiseAbs().maxCoeff() > 1e-6f) return false;
+    return true;
+  };
+  auto predict = [&](SimdLevel level, bool keepStart, bool damp, std::vector<V>& v, std::vector<V>& x0,
+                     std::vector<V>& xp, std::vector<P>& xw) {
+    v = v0, x0.assign(n, V::Zero()), xp.assign(n, V::Zero()), xw.assign(n, P::Constant(7.0f));
+    for (Index begin = 0; begin < n; begin += 50) {  // shares of 50: starts that are not a multiple of four
+      const Index end = std::min(begin + 50, n);
+      if (keepStart && damp)
+        drape::predictPositions<true, true>(begin, end, x.data(), v.data(), w.data(), gh, h, x0.data(), xp.data(),
+                                            xw.data(), keep, level);
+      else if (keepStart)
+        drape::predictPositions<true, false>(begin, end, x.data(), v.data(), w.data(), gh, h, x0.data(), xp.data(),
+                                             xw.data(), keep, level);
+      else if (damp)
+        drape::predictPositions<false, true>(begin, end, x.data(), v.data(), w.data(), gh, h, x0.data(), xp.data(),
+                                             xw.data(), keep, level);
+      else
+        drape::predictPositions<false, false>(begin, end, x.data(), v.data(), w.data(), gh, h, x0.data(),
+                                              xp.data(), xw.data(), keep, level);
+    }
+  };
+  for (const bool keepStart : {false, true})
+    for (const bool damp : {false, true}) {
+      INFO("keep the start " << keepStart << ", damp " << damp);
+      std::vector<V> vs, x0s, xps, vl, x0l, xpl;
+      std::vector<P> xws, xwl;
+      predict(SimdLevel::Scalar, keepStart, damp, vs, x0s, xps, xws);
+      CHECK(vs[4] == v0[4]);  // pinned
+      CHECK(xps[4] == x[4]);
+      CHECK(vs[5] != v0[5]);
+      CHECK((x0s == x) == keepStart);
+      CHECK(xws[n - 1].w() == 0.0f);
+      predict(SimdLevel::Sse2, keepStart, damp, vl, x0l, xpl, xwl);
+      CHECK(agree(vs, vl));
+      CHECK(agree(x0s, x0l));
+      CHECK(agree(xps, xpl));
+      CHECK(agree(xws, xwl));
+    }
+  for (const bool keepSolved : {false, true}) {
+    INFO("keep the solved positions " << keepSolved);
+    auto update = [&](SimdLevel level, std::vector<V>& xo, std::vector<V>& v, std::vector<V>& xp) {
+      xo.assign(n, V::Zero()), v = v0, xp = x;
+      for (Index begin = 0; begin < n; begin += 50) {
+        const Index end = std::min(begin + 50, n);
+        if (keepSolved)
+          drape::updateVelocities<true, false>(begin, end, solved.data(), xp.data(), xo.data(), v.data(), 1.0f / h,
+                                               static_cast<const V*>(nullptr), level);
+        else
+          drape::updateVelocities<false, false>(begin, end, solved.data(), xp.data(), xo.data(), v.data(),
+                                                1.0f / h, static_cast<const V*>(nullptr), level);
+      }
+    };
+    std::vector<V> xs, vs, xps, xl, vl, xpl;
+    update(SimdLevel::Scalar, xs, vs, xps);
+    CHECK(xs[n - 1] == solved[n - 1].head<3>());
+    CHECK((xps == xs) == keepSolved);
+    update(SimdLevel::Sse2, xl, vl, xpl);
+    CHECK(agree(xs, xl));
+    CHECK(agree(vs, vl));
+    CHECK(agree(xps, xpl));
+  }
+}

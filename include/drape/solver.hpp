@@ -185,9 +185,11 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     const S* w = state_.invMass.data();
     const Index n = vertexCount();
     const S keep = S(settings_.velocityKept(double(h)));
+    // Shares of whole fours, which float takes in SIMD lanes: the same vertices on any number of threads.
+    const SimdLevel level = simdLevelFor<S>(bestSimdLevel());
     withFlags([&](auto keepStart, auto damp) {
-      teamFor(n, [&](Index b, Index e) {
-        predictPositions<keepStart(), damp()>(b, e, x, v, w, gh, h, x0, xp, xw, keep);
+      teamFor((n + 3) / 4, [&](Index b, Index e) {
+        predictPositions<keepStart(), damp()>(4 * b, std::min(4 * e, n), x, v, w, gh, h, x0, xp, xw, keep, level);
       });
     }, hasFriction_ || coupled_ || sweep_ || keepSpin_, settings_.airDamping > 0);
   }
@@ -316,8 +318,11 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
       passes_.addUpdateDrift(far);
       DRAPE_OMP(barrier)
     } else {
+      const SimdLevel level = simdLevelFor<S>(bestSimdLevel());  // in whole fours, as the prediction
       withFlags([&](auto keep) {
-        teamFor(n, [&](Index b, Index e) { updateVelocities<keep(), false>(b, e, xw, xp, x, v, invH); });
+        teamFor((n + 3) / 4, [&](Index b, Index e) {
+          updateVelocities<keep(), false>(4 * b, std::min(4 * e, n), xw, xp, x, v, invH, {}, level);
+        });
       }, reconcile_);
     }
   }
