@@ -66,9 +66,10 @@ vec3 momentAbout(vec3 a, vec3 centre, vec3 n) {
 // Records that the vertex was placed at x, dn along n, out of a solid whose velocity there is vc
 // (ContactBuffer::record and recordMore): a new direction takes a free slot; the same surface seen again (the
 // normals within kMergeCos) takes the latest normal and placement; a direction that finds every slot taken joins
-// the closest, whose normal stays, and marks the record overflowed. The corrections add up. In a coupled body's
-// kernels (DRAPE_BODY) the slot's line takes this contact's share of its push and moment (`moment` about the
-// body's centre); other solids' kernels write no line.
+// the closest, whose normal stays, unless it faces away from every one or two of them are one body's faces and it
+// is another solid's (the two closest such then share a slot and it takes the other), and marks the record
+// overflowed. The corrections add up. In a coupled body's kernels (DRAPE_BODY) the slot's line takes this
+// contact's share of its push and moment (`moment` about the body's centre); other solids' kernels write no line.
 void recordContact(inout Contact c, vec3 x, vec3 n, float dn, vec3 vc, vec2 friction, int body, vec3 moment) {
   const uint count = c.slots.x;
   if (count == 0u) {
@@ -107,6 +108,39 @@ void recordContact(inout Contact c, vec3 x, vec3 n, float dn, vec3 vc, vec2 fric
     for (int k = 0; k < DRAPE_CONTACT_SLOTS; ++k) {
       const float cs = dot3(c.normal[k].xyz, n);
       if (cs > bestCos) best = k, bestCos = cs;
+    }
+    // A direction facing away from every recorded one, or two recorded faces of one body while this contact is
+    // another solid's: the two closest recorded ones share a slot (mergeSlot), and this one takes the other.
+    int keep = -1, give = -1;
+    float pairCos = bestCos;
+    for (int j = 0; j < DRAPE_CONTACT_SLOTS; ++j)
+      for (int k = j + 1; k < DRAPE_CONTACT_SLOTS; ++k) {
+        const bool oneBody = c.body[j] >= 0 && c.body[j] == c.body[k] && c.body[j] != body;
+        const float cs = dot3(c.normal[j].xyz, c.normal[k].xyz);
+        if ((bestCos < 0.0 || oneBody) && cs > pairCos) keep = j, give = k, pairCos = cs;
+      }
+    if (keep >= 0) {
+      precise const float merged = c.normal[keep].w + c.normal[give].w;
+#if DRAPE_BODY
+      if (c.body[keep] == c.body[give] && merged > 0.0) {
+        precise const float share = c.normal[give].w / merged;
+        precise const vec3 push =
+            lineRecord.push[keep].xyz + share * (lineRecord.push[give].xyz - lineRecord.push[keep].xyz);
+        precise const vec3 mom =
+            lineRecord.moment[keep].xyz + share * (lineRecord.moment[give].xyz - lineRecord.moment[keep].xyz);
+        lineRecord.push[keep] = vec4(push, 0.0);
+        lineRecord.moment[keep] = vec4(mom, 0.0);
+      }
+      lineRecord.push[give] = vec4(n, 0.0);
+      lineRecord.moment[give] = vec4(moment, 0.0);
+#endif
+      c.velocity[keep].w = max(c.velocity[keep].w, dot3(c.normal[keep].xyz, x));
+      c.normal[keep].w = merged;
+      c.normal[give] = vec4(n, dn);
+      c.velocity[give] = vec4(vc, dot3(n, x));
+      c.friction[give] = vec4(friction, 0.0, 0.0);
+      c.body[give] = body;
+      return;
     }
   }
   precise const float total = c.normal[best].w + dn;

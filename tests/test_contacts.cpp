@@ -66,6 +66,65 @@ TEMPLATE_TEST_CASE("the settle never places a vertex behind a surface that found
   CHECK(settled.z() >= S(0));
 }
 
+TEMPLATE_TEST_CASE("a surface facing away from every recorded one keeps a slot, and the response answers it",
+                   "[contacts]", float, double) {
+  // Three faces of a body's corner pressing a vertex down, then the floor under it (the rain's vertices that went
+  // 4-9 mm into the floor, `rigid_rain --bodies 80`, seeds 1-3). Joined to the closest face, the floor was lost:
+  // nothing kept the vertex's velocity from carrying it into the floor.
+  using S = TestType;
+  using V = drape::Vec3<S>;
+  const V n[3] = {V(S(0.3), S(0.1), S(-0.95)).normalized(), V(S(-0.2), S(0.35), S(-0.9)).normalized(),
+                  V(S(0.05), S(-0.4), S(-0.9)).normalized()};
+  const S dn[3] = {S(0.004), S(0.003), S(0.002)};
+  drape::SolidMotion<S> still{V::Zero(), V::Zero(), V::Zero(), S(0), S(0), -1};
+  const V x0(S(0.1), S(-0.2), S(0.003));
+  drape::ContactBuffer<S> buffer;
+  buffer.resize(1);
+  buffer.begin();
+  for (int k = 0; k < 3; ++k) buffer.template record<false>(0, x0, n[k], dn[k], still, x0, V::Zero());
+  REQUIRE(int(buffer.slotCount[0]) == 3);
+  // The two closest faces: they will share a slot.
+  int keep = 0, give = 1;
+  for (int j = 0; j < 3; ++j)
+    for (int k = j + 1; k < 3; ++k)
+      if (n[j].dot(n[k]) > n[keep].dot(n[give])) keep = j, give = k;
+  buffer.template record<false>(0, x0, V::UnitZ(), S(0.001), still, x0, V::Zero());
+  CHECK(buffer.overflow[0] == buffer.current);
+  CHECK(int(buffer.slotCount[0]) == 3);
+  CHECK(buffer.slots[0][std::size_t(give)].normal == V::UnitZ());
+  CHECK(buffer.slots[0][std::size_t(keep)].normal == n[keep]);
+  CHECK(buffer.slots[0][std::size_t(keep)].correction == dn[keep] + dn[give]);
+  // A vertex driven down into the floor between them stops: its velocity approaches none of the recorded
+  // surfaces (the face that gave up its slot is not among them).
+  V x = x0, xPrev = x0, v(S(0.1), S(0), S(-1));
+  drape::respondContacts<false>(0, 1, buffer, &x, &xPrev, &v, S(1) / S(600), S(0));
+  CHECK(v.z() >= S(0));
+  for (int k = 0; k < 3; ++k) CHECK(buffer.slots[0][std::size_t(k)].normal.dot(v) >= -S(1e-6));
+  // A fourth direction near the others still joins the closest: the first three seen stay.
+  drape::ContactBuffer<S> near;
+  near.resize(1);
+  near.begin();
+  for (int k = 0; k < 3; ++k) near.template record<false>(0, x0, n[k], dn[k], still, x0, V::Zero());
+  const V side = V(S(0.6), S(0.3), S(-0.75)).normalized();
+  near.template record<false>(0, x0, side, S(0.001), still, x0, V::Zero());
+  for (int k = 0; k < 3; ++k) CHECK(near.slots[0][std::size_t(k)].normal == n[k]);
+  // But where the three are one coupled body's faces and a direction from another solid is further from each of
+  // them than the body's two closest faces are from each other, those share a slot: a slot mixes one body's faces
+  // rather than two solids.
+  drape::ContactBuffer<S> bodies;
+  bodies.resize(1);
+  bodies.keepLines(true);
+  bodies.begin();
+  drape::SolidMotion<S> body = still;
+  body.body = 2;
+  for (int k = 0; k < 3; ++k) bodies.template record<true>(0, x0, n[k], dn[k], body, x0, V::Zero());
+  const V across = V(S(1), S(0), S(0.1)).normalized();  // not facing away from all three (from n[0] 0.3)
+  bodies.template record<false>(0, x0, across, S(0.001), still, x0, V::Zero());
+  CHECK(bodies.slots[0][std::size_t(give)].normal == across);
+  CHECK(bodies.slots[0][std::size_t(give)].body == -1);
+  CHECK(bodies.slots[0][std::size_t(keep)].correction == dn[keep] + dn[give]);
+}
+
 TEMPLATE_TEST_CASE("the eigen-decomposition of a 3x3 normal matrix agrees with Eigen's", "[contacts]", float, double) {
   using S = TestType;
   // symmetricEigen3 (and its GLSL twin) against Eigen's solver, on sums of one to three outer products of unit

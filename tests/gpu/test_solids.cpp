@@ -255,3 +255,120 @@ TEST_CASE("a cloth pinched between a ball and the floor, by a box's corner: GPU 
   CHECK(r.heightGap <= 0.01);
   CHECK(r.gpuMeter.rms() <= 2 * r.cpuMeter.rms() + 1e-3);
 }
+
+TEST_CASE("collide_vertices: a surface that finds every slot taken, against the CPU vertex pass's records", "[gpu]") {
+  // Every vertex already holds three differently facing surfaces when a floor (the top of a large box) catches it.
+  // Where all three face away from the floor (the faces of a body's corner pressing down), or all three are one
+  // coupled body's, the two closest share a slot and the floor takes the other; otherwise the floor joins its
+  // closest (recordMore, recordContact).
+  drape::test::gpuContext().makeCurrent();
+  const int n = 600;
+  std::mt19937 rng(13);
+  std::uniform_real_distribution<float> unit(-1.0f, 1.0f), frac(0.0f, 1.0f);
+  drape::Solid<drape::Box> floor;
+  floor.shape.halfExtents = {1.0, 1.0, 0.1};
+  floor.pose.position = {0, 0, -0.1};
+  floor.staticFriction = 0.4;
+  floor.dynamicFriction = 0.3;
+  const auto solid = drape::detail::compileSolid<drape::Box, float>(floor, Eigen::Vector3d::Zero());
+  const float thickness = 0.005f;
+  std::vector<Vec3<float>> x(std::size_t(n), Vec3<float>::Zero());
+  std::vector<float> w(std::size_t(n), 1.0f);
+  drape::ContactBuffer<float> cpu;
+  cpu.resize(n);
+  cpu.begin();
+  std::vector<layout::Contact> gpu(std::size_t(n), layout::Contact{});
+  int facingAway = 0;
+  for (int i = 0; i < n; ++i) {
+    x[std::size_t(i)] = Vec3<float>(0.3f * unit(rng), 0.3f * unit(rng), 0.004f * frac(rng));
+    const bool down = i % 2 == 0;  // all three facing down: the floor faces away from every one
+    Vec3<float> normals[3];
+    for (int k = 0; k < 3; ++k) {
+      bool apart;
+      do {
+        normals[k] = Vec3<float>(unit(rng), unit(rng), down ? -0.3f - frac(rng) : unit(rng)).normalized();
+        apart = normals[k].z() < 0.9f;  // never the floor's own direction (that would merge, not overflow)
+        for (int j = 0; j < k; ++j) apart = apart && normals[j].dot(normals[k]) < 0.9f;
+      } while (!apart);
+    }
+    facingAway += down;
+    cpu.stamp[std::size_t(i)] = cpu.current;
+    cpu.slotCount[std::size_t(i)] = 3;
+    layout::Contact& g = gpu[std::size_t(i)];
+    g.slots[0] = 3;
+    for (int k = 0; k < 3; ++k) {
+      drape::ContactSlot<float> c;
+      c.normal = normals[k];
+      c.solidVelocity = 0.3f * Vec3<float>(unit(rng), unit(rng), unit(rng));
+      c.correction = 0.002f * frac(rng);
+      c.staticFriction = 0.5f * frac(rng);
+      c.dynamicFriction = 0.5f * frac(rng);
+      c.offset = c.normal.dot(x[std::size_t(i)]) - 0.001f * frac(rng);
+      c.body = i % 6 == 1 ? 5 : -1;  // now and then three faces of one coupled body: they make room too
+      cpu.slots[std::size_t(i)][std::size_t(k)] = c;
+      for (int a = 0; a < 3; ++a) g.normal[k][a] = c.normal[a], g.velocity[k][a] = c.solidVelocity[a];
+      g.normal[k][3] = c.correction;
+      g.velocity[k][3] = c.offset;
+      g.friction[k][0] = c.staticFriction;
+      g.friction[k][1] = c.dynamicFriction;
+      g.body[k] = c.body;
+    }
+  }
+  std::vector<Vec3<float>> xc = x;
+  const auto found = drape::projectVertexContacts(0, n, solid, thickness, xc.data(), w.data(), drape::AllItems{}, cpu,
+                                                  xc.data(), 0.0f);
+  REQUIRE(found.found == n);
+
+  drape::gpu::Buffer<layout::Vertex> gx(packed(x, 1.0f));
+  drape::gpu::Buffer<layout::Contact> gc(gpu);
+  drape::gpu::Buffer<std::uint32_t> flags(std::vector<std::uint32_t>(4, 0u));
+  gx.bind(layout::kPositions);
+  gx.bind(layout::kStart);
+  gc.bind(layout::kContacts);
+  flags.bind(layout::kFlags);
+  drape::gpu::Program k("collide_vertices", drape::gpu::shaders::collide_vertices,
+                        drape::gpu::shapeDefine<drape::Box>());
+  k.set(layout::kThickness, thickness);
+  drape::gpu::setShape(k.id(), drape::gpu::packShape(solid.sdf));
+  k.set(layout::kSolidCentre, solid.motion.centre.x(), solid.motion.centre.y(), solid.motion.centre.z());
+  k.set(layout::kSolidLinear, 0.0f, 0.0f, 0.0f);
+  k.set(layout::kSolidAngular, 0.0f, 0.0f, 0.0f);
+  glProgramUniform2f(k.id(), layout::kFriction, solid.motion.staticFriction, solid.motion.dynamicFriction);
+  k.set(layout::kBoxLow, solid.boxLow.x(), solid.boxLow.y(), solid.boxLow.z());
+  k.set(layout::kBoxHigh, solid.boxHigh.x(), solid.boxHigh.y(), solid.boxHigh.z());
+  k.set(layout::kSweep, 0.0f, 0.0f);
+  k.set(layout::kCount, unsigned(n));
+  k.set(layout::kSlack, 0.0f);
+  glProgramUniform1i(k.id(), layout::kPass, -1);
+  k.set(layout::kFresh, 0u);  // the records above stand
+  k.dispatch(std::size_t(n));
+  const auto gpuC = gc.read();
+
+  CHECK(drape::test::largestDifference(unpacked(gx.read()), xc) <= 1e-7);
+  int merged = 0, joined = 0;
+  for (int i = 0; i < n; ++i) {
+    INFO("vertex " << i);
+    const layout::Contact& g = gpuC[std::size_t(i)];
+    REQUIRE(g.slots[0] == 3u);
+    CHECK(g.slots[1] == 1u);
+    REQUIRE(cpu.overflow[std::size_t(i)] == cpu.current);
+    bool floorSlot = false;
+    for (int s = 0; s < 3; ++s) {
+      const drape::ContactSlot<float>& c = cpu.slots[std::size_t(i)][std::size_t(s)];
+      INFO("slot " << s);
+      for (int a = 0; a < 3; ++a) CHECK(g.normal[s][a] == c.normal[a]);
+      CHECK(std::abs(g.normal[s][3] - c.correction) <= 1e-6f * c.correction + 1e-12f);
+      CHECK(std::abs(g.velocity[s][3] - c.offset) <= 1e-6f);
+      for (int a = 0; a < 3; ++a) CHECK(g.velocity[s][a] == c.solidVelocity[a]);
+      CHECK(g.friction[s][0] == c.staticFriction);
+      CHECK(g.friction[s][1] == c.dynamicFriction);
+      CHECK(g.body[s] == c.body);
+      floorSlot = floorSlot || c.normal == Vec3<float>::UnitZ();
+    }
+    merged += floorSlot, joined += !floorSlot;
+  }
+  INFO(merged << " records made room for the floor, " << joined << " joined it to a slot, " << facingAway
+                << " had all three facing away from it");
+  CHECK(merged > n / 4);  // both ways are compared
+  CHECK(joined > n / 5);
+}

@@ -57,8 +57,9 @@ template <Scalar S> struct ContactBuffer {
   std::uint32_t current = 0;
   std::vector<std::array<ContactSlot<S>, kSlots>> slots;
   std::vector<std::uint8_t> slotCount;
-  /// == current when a surface of vertex i found every slot taken by other directions and joined the closest
-  /// (recordMore): its slots then misstate one surface, and the planes alone must not place the vertex.
+  /// == current when a surface of vertex i found every slot taken by other directions (recordMore): it joined the
+  /// closest, or two closer slots merged to make room. The slots then misstate a surface, and the planes alone must
+  /// not place the vertex.
   std::vector<std::uint32_t> overflow;
   std::vector<S> normalDv;  ///< normal velocity change the response made (m/s), the source of propagation
   /// Per vertex and slot, the lines of a coupled body's contacts (ContactLine): sized by keepLines, written only
@@ -146,11 +147,32 @@ template <Scalar S> struct ContactBuffer {
       own[slotCount[i]++] = {n, vc, dn, m.staticFriction, m.dynamicFriction, n.dot(x), m.body};
       return;
     }
-    if (best < 0) {  // all slots taken by other directions: join the closest
+    if (best < 0) {  // all slots taken by other directions: join the closest, or make room (below)
       overflow[i] = current;
       bestCos = -2;
       for (int k = 0; k < kSlots; ++k)
         if (own[k].normal.dot(n) > bestCos) best = k, bestCos = own[k].normal.dot(n);
+      // A direction facing away from every recorded one (the floor under three faces of a body's corner: the
+      // vertex is pinched) is the one the slots know least: joined to a face of the body, nothing would keep the
+      // vertex out of the floor. Nor should one solid's contact join another's when two slots hold faces of one
+      // body. The two closest such recorded directions then share a slot, and it takes the other. Any other
+      // direction joins its closest: on one solid the first three seen (on a ball hit fast, the vertex's own
+      // normal among them) say most about where the vertex may go; merging the closest pair there instead let a
+      // cloth thrown at a ball at 50 m/s 3 cm deeper into it.
+      int keep = -1, give = -1;
+      S pairCos = bestCos;
+      for (int j = 0; j < kSlots; ++j)
+        for (int k = j + 1; k < kSlots; ++k) {
+          const bool oneBody = own[j].body >= 0 && own[j].body == own[k].body && own[j].body != m.body;
+          if ((bestCos < S(0) || oneBody) && own[j].normal.dot(own[k].normal) > pairCos)
+            keep = j, give = k, pairCos = own[j].normal.dot(own[k].normal);
+        }
+      if (keep >= 0) {
+        mergeSlot<kBody>(i, keep, give, x);
+        if constexpr (kBody) lines[i][give] = {n, (anchor - m.centre).cross(n)};
+        own[give] = {n, vc, dn, m.staticFriction, m.dynamicFriction, n.dot(x), m.body};
+        return;
+      }
     }
     if constexpr (kBody) {
       ContactLine<S>& line = lines[i][best];
@@ -172,6 +194,28 @@ template <Scalar S> struct ContactBuffer {
     }
     own[best].solidVelocity = vc;
     own[best].correction += dn;
+  }
+
+  /// Slot `give` of vertex i joins slot `keep`, as a contact of another direction joins a slot (recordMore): the
+  /// kept normal, friction and solid stay, the half-space moves out to the vertex at x if it is beyond it, the
+  /// corrections add up. A body's kernels (kBody) also merge the lines where both slots are the same body's,
+  /// weighted by their corrections; other solids' kernels keep the kept slot's line as it is (the GPU's load no
+  /// lines there).
+  template <bool kBody> void mergeSlot(Index i, int keep, int give, const Vec3<S>& x) {
+    ContactSlot<S>& a = slots[i][keep];
+    const ContactSlot<S>& b = slots[i][give];
+    const S total = a.correction + b.correction;
+    if constexpr (kBody) {
+      if (a.body == b.body && total > S(0)) {
+        ContactLine<S>& la = lines[i][keep];
+        const ContactLine<S>& lb = lines[i][give];
+        const S share = b.correction / total;
+        la.push += share * (lb.push - la.push);
+        la.moment += share * (lb.moment - la.moment);
+      }
+    }
+    a.offset = std::max(a.offset, a.normal.dot(x));
+    a.correction = total;
   }
 };
 
