@@ -56,8 +56,8 @@ std::vector<float> masses(Index n) {
   return w;
 }
 
-bool sameBits(const std::vector<drape::Vec4<float>>& a, const std::vector<drape::Vec4<float>>& b) {
-  return std::memcmp(a.data(), b.data(), a.size() * sizeof(a[0])) == 0;
+template <class V> bool sameBits(const std::vector<V>& a, const std::vector<V>& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(V)) == 0;
 }
 
 #if defined(__FMA__)
@@ -68,8 +68,9 @@ constexpr bool kFusedBuild = true;
 constexpr bool kFusedBuild = false;
 #endif
 
-/// The kernels' positions agree: bit for bit, or in a fused build within 1e-6 m (a few float ulps at 0.2 m).
-bool agree(const std::vector<drape::Vec4<float>>& a, const std::vector<drape::Vec4<float>>& b) {
+/// The kernels' positions (or velocities) agree: bit for bit, or in a fused build within 1e-6 (a few float ulps
+/// at 0.2 m).
+template <class V> bool agree(const std::vector<V>& a, const std::vector<V>& b) {
   if (!kFusedBuild) return sameBits(a, b);
   for (std::size_t i = 0; i < a.size(); ++i)
     if ((a[i] - b[i]).cwiseAbs().maxCoeff() > 1e-6f) return false;
@@ -234,21 +235,15 @@ TEST_CASE("the four- and eight-lane contact responses give the scalar response's
     INFO("friction " << friction);
     CHECK((xs != x0) == friction);  // friction moved positions, and only friction
     CHECK(vs != v0);
-    auto agreeV = [](const std::vector<V>& a, const std::vector<V>& b) {
-      if (!kFusedBuild) return std::memcmp(a.data(), b.data(), a.size() * sizeof(V)) == 0;
-      for (std::size_t i = 0; i < a.size(); ++i)
-        if ((a[i] - b[i]).cwiseAbs().maxCoeff() > 1e-6f) return false;
-      return true;
-    };
     for (const SimdLevel level : {SimdLevel::Sse2, SimdLevel::Avx2}) {
       if (level > drape::bestSimdLevel()) continue;
       INFO("SIMD level " << int(level));
       std::vector<V> xv, vv;
       std::vector<float> dvv;
       run(level, xv, vv, dvv);
-      CHECK(agreeV(xs, xv));
-      CHECK(agreeV(vs, vv));
-      if (!kFusedBuild) CHECK(std::memcmp(dvs.data(), dvv.data(), dvs.size() * sizeof(float)) == 0);
+      CHECK(agree(xs, xv));
+      CHECK(agree(vs, vv));
+      if (!kFusedBuild) CHECK(sameBits(dvs, dvv));
     }
   }
 }
@@ -348,12 +343,6 @@ TEST_CASE("the four-lane prediction and velocity update give the scalar loops' b
   }
   const V gh(0.3f, -0.2f, -9.81f / 300.0f);
   const float h = 1.0f / 300.0f, keep = 0.997f;
-  auto agree = [](const auto& a, const auto& b) {
-    if (!kFusedBuild) return std::memcmp(a.data(), b.data(), a.size() * sizeof(a[0])) == 0;
-    for (std::size_t i = 0; i < a.size(); ++i)
-      if ((a[i] - b[i]).cwiseAbs().maxCoeff() > 1e-6f) return false;
-    return true;
-  };
   auto predict = [&](SimdLevel level, bool keepStart, bool damp, std::vector<V>& v, std::vector<V>& x0,
                      std::vector<V>& xp, std::vector<P>& xw) {
     v = v0, x0.assign(n, V::Zero()), xp.assign(n, V::Zero()), xw.assign(n, P::Constant(7.0f));

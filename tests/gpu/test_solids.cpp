@@ -21,6 +21,16 @@ using drape::Index;
 using drape::Vec3;
 namespace layout = drape::gpu::layout;
 
+/// Slot k of a GPU record as the CPU's slot c holds it.
+void putSlot(layout::Contact& g, int k, const drape::ContactSlot<float>& c) {
+  for (int a = 0; a < 3; ++a) g.normal[k][a] = c.normal[a], g.velocity[k][a] = c.solidVelocity[a];
+  g.normal[k][3] = c.correction;
+  g.velocity[k][3] = c.offset;
+  g.friction[k][0] = c.staticFriction;
+  g.friction[k][1] = c.dynamicFriction;
+  g.body[k] = c.body;
+}
+
 /// Random contact records for n vertices: each has 1 to 3 slots whose planes pass within 3 mm of its position,
 /// facing anywhere (so some vertices lie outside all of them, some are pinched between facing planes, some sit
 /// in a wedge or a corner), with random solid velocities, corrections and friction; the CPU's ContactBuffer and
@@ -65,15 +75,7 @@ struct RandomContacts {
         c.offset = c.normal.dot(at) + 0.003f * unit(rng);
         c.body = -1;
         cpu.slots[std::size_t(i)][std::size_t(k)] = c;
-        for (int a = 0; a < 3; ++a) {
-          g.normal[k][a] = c.normal[a];
-          g.velocity[k][a] = c.solidVelocity[a];
-        }
-        g.normal[k][3] = c.correction;
-        g.velocity[k][3] = c.offset;
-        g.friction[k][0] = c.staticFriction;
-        g.friction[k][1] = c.dynamicFriction;
-        g.body[k] = -1;
+        putSlot(g, k, c);
       }
     }
   }
@@ -306,12 +308,7 @@ TEST_CASE("collide_vertices: a surface that finds every slot taken, against the 
       c.offset = c.normal.dot(x[std::size_t(i)]) - 0.001f * frac(rng);
       c.body = i % 6 == 1 ? 5 : -1;  // now and then three faces of one coupled body: they make room too
       cpu.slots[std::size_t(i)][std::size_t(k)] = c;
-      for (int a = 0; a < 3; ++a) g.normal[k][a] = c.normal[a], g.velocity[k][a] = c.solidVelocity[a];
-      g.normal[k][3] = c.correction;
-      g.velocity[k][3] = c.offset;
-      g.friction[k][0] = c.staticFriction;
-      g.friction[k][1] = c.dynamicFriction;
-      g.body[k] = c.body;
+      putSlot(g, k, c);
     }
   }
   std::vector<Vec3<float>> xc = x;

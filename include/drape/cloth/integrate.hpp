@@ -18,7 +18,8 @@ namespace detail {
 struct SpreadFour {
   __m128 a, b, c;
   explicit SpreadFour(__m128 m)
-      : a(_mm_shuffle_ps(m, m, _MM_SHUFFLE(1, 0, 0, 0))), b(_mm_shuffle_ps(m, m, _MM_SHUFFLE(2, 2, 1, 1))),
+      : a(_mm_shuffle_ps(m, m, _MM_SHUFFLE(1, 0, 0, 0))),
+        b(_mm_shuffle_ps(m, m, _MM_SHUFFLE(2, 2, 1, 1))),
         c(_mm_shuffle_ps(m, m, _MM_SHUFFLE(3, 3, 3, 2))) {}
   SpreadFour(__m128 a_, __m128 b_, __m128 c_) : a(a_), b(b_), c(c_) {}
 };
@@ -45,8 +46,8 @@ inline void loadPackedFour(const Vec4<float>* xw, __m128& a, __m128& b, __m128& 
 
 /// predictPositions for vertices i .. i + 3: lane by lane the scalar loop's operations, so its bits.
 template <bool kKeepStart, bool kDamp>
-inline void predictFour(Index i, const Vec3<float>* x, Vec3<float>* v, const float* w, const SpreadFour& gh,
-                        __m128 h, __m128 keep, Vec3<float>* x0, Vec3<float>* xp, Vec4<float>* xw) {
+inline void predictFour(Index i, const Vec3<float>* x, Vec3<float>* v, const float* w, const SpreadFour& gh, __m128 h,
+                        __m128 keep, Vec3<float>* x0, Vec3<float>* xp, Vec4<float>* xw) {
   const SpreadFour free(_mm_cmpneq_ps(_mm_loadu_ps(w + i), _mm_setzero_ps()));
   const float* px = x[i].data();
   float* pv = v[i].data();
@@ -62,7 +63,8 @@ inline void predictFour(Index i, const Vec3<float>* x, Vec3<float>* v, const flo
     _mm_storeu_ps(vs, select(m, vNew, vOld));
     return select(m, _mm_add_ps(xs, _mm_mul_ps(h, vNew)), xs);
   };
-  const __m128 pa = part(xa, pv, gh.a, free.a), pb = part(xb, pv + 4, gh.b, free.b), pc = part(xc, pv + 8, gh.c, free.c);
+  const __m128 pa = part(xa, pv, gh.a, free.a), pb = part(xb, pv + 4, gh.b, free.b),
+               pc = part(xc, pv + 8, gh.c, free.c);
   float* pp = xp[i].data();
   _mm_storeu_ps(pp, pa), _mm_storeu_ps(pp + 4, pb), _mm_storeu_ps(pp + 8, pc);
   storePackedFour(xw + i, pa, pb, pc);
@@ -70,16 +72,15 @@ inline void predictFour(Index i, const Vec3<float>* x, Vec3<float>* v, const flo
 
 /// updateVelocities (without the drift) for vertices i .. i + 3, the scalar loop's bits.
 template <bool kKeepSolved>
-inline void updateFour(Index i, const Vec4<float>* xw, Vec3<float>* xp, Vec3<float>* x, Vec3<float>* v,
-                       __m128 invH) {
+inline void updateFour(Index i, const Vec4<float>* xw, Vec3<float>* xp, Vec3<float>* x, Vec3<float>* v, __m128 invH) {
   __m128 p[3];
   loadPackedFour(xw + i, p[0], p[1], p[2]);
   float* pv = v[i].data();
   float* pp = xp[i].data();
   float* px = x[i].data();
   for (int k = 0; k < 3; ++k) {
-    _mm_storeu_ps(pv + 4 * k, _mm_add_ps(_mm_loadu_ps(pv + 4 * k),
-                                         _mm_mul_ps(_mm_sub_ps(p[k], _mm_loadu_ps(pp + 4 * k)), invH)));
+    _mm_storeu_ps(pv + 4 * k,
+                  _mm_add_ps(_mm_loadu_ps(pv + 4 * k), _mm_mul_ps(_mm_sub_ps(p[k], _mm_loadu_ps(pp + 4 * k)), invH)));
     _mm_storeu_ps(px + 4 * k, p[k]);
     if constexpr (kKeepSolved) _mm_storeu_ps(pp + 4 * k, p[k]);
   }
@@ -102,10 +103,12 @@ void predictPositions(Index begin, Index end, const Vec3<S>* x, Vec3<S>* v, cons
 #if DRAPE_SSE2
   if constexpr (std::is_same_v<S, float>) {
     if (level != SimdLevel::Scalar) {
-      const detail::SpreadFour g(_mm_setr_ps(gh.x(), gh.y(), gh.z(), gh.x()), _mm_setr_ps(gh.y(), gh.z(), gh.x(), gh.y()),
+      const detail::SpreadFour g(_mm_setr_ps(gh.x(), gh.y(), gh.z(), gh.x()),
+                                 _mm_setr_ps(gh.y(), gh.z(), gh.x(), gh.y()),
                                  _mm_setr_ps(gh.z(), gh.x(), gh.y(), gh.z()));
       const __m128 hv = _mm_set1_ps(h), keepV = _mm_set1_ps(keep);
-      for (; i < end && i % 4 != 0; ++i) predictPositions<kKeepStart, kDamp>(i, i + 1, x, v, w, gh, h, x0, xp, xw, keep);
+      for (; i < end && i % 4 != 0; ++i)
+        predictPositions<kKeepStart, kDamp>(i, i + 1, x, v, w, gh, h, x0, xp, xw, keep);
       for (; i + 4 <= end; i += 4) detail::predictFour<kKeepStart, kDamp>(i, x, v, w, g, hv, keepV, x0, xp, xw);
     }
   }

@@ -164,8 +164,8 @@ template <Scalar S> struct ContactBuffer {
       for (int j = 0; j < kSlots; ++j)
         for (int k = j + 1; k < kSlots; ++k) {
           const bool oneBody = own[j].body >= 0 && own[j].body == own[k].body && own[j].body != m.body;
-          if ((bestCos < S(0) || oneBody) && own[j].normal.dot(own[k].normal) > pairCos)
-            keep = j, give = k, pairCos = own[j].normal.dot(own[k].normal);
+          const S c = own[j].normal.dot(own[k].normal);
+          if ((bestCos < S(0) || oneBody) && c > pairCos) keep = j, give = k, pairCos = c;
         }
       if (keep >= 0) {
         mergeSlot<kBody>(i, keep, give, x);
