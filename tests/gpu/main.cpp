@@ -10,9 +10,9 @@
 #include <cstdio>
 
 int main(int argc, char* argv[]) {
-  Catch::Session session;
-  if (const int rc = session.applyCommandLine(argc, argv); rc != 0) return rc;
-  const Catch::ConfigData& c = session.configData();
+  Catch::Session runner;
+  if (const int rc = runner.applyCommandLine(argc, argv); rc != 0) return rc;
+  const Catch::ConfigData& c = runner.configData();
   const bool listing = c.listTests || c.listTestNamesOnly || c.listTags || c.listReporters;
   if (!listing) {
     try {
@@ -26,5 +26,5 @@ int main(int argc, char* argv[]) {
       return 77;
     }
   }
-  return session.run();
+  return runner.run();
 }
