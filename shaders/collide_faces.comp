@@ -541,7 +541,9 @@ bool sweepFace(vec3 a0, vec3 a1, vec3 a2, vec3 b0, vec3 b1, vec3 b2, out vec3 qb
 
 // The direction a face contact pushes along, and how far (featureAlignedPush in
 // include/drape/collision/response.hpp): at a sharp feature, a deepest point inside the face goes along the face's
-// normal, one on an edge across that edge; a gradient already within the bounds is kept.
+// normal, one on an edge across that edge and, on a field with edges, across the solid's edge too (the gradients to
+// either side of the point, mixed to have no part along the face's edge); a gradient already within the bounds is
+// kept.
 float featureAlignedPush(vec3 x0, vec3 x1, vec3 x2, float depth, vec3 qb, vec3 qp, inout vec3 qn) {
   int onEdge = 0, zero = -1;
   for (int k = 0; k < 3; ++k)
@@ -563,6 +565,19 @@ float featureAlignedPush(vec3 x0, vec3 x1, vec3 x2, float depth, vec3 qb, vec3 q
     const float along = dot3(qn, e);
     if (abs(along) <= DRAPE_FEATURE_EDGE_SINE) return depth;
     precise vec3 w = qn - along * e;
+#if !DRAPE_SMOOTH_FIELD
+    precise const float probe = DRAPE_FEATURE_EDGE_PROBE * len;
+    precise const vec3 behind = qp - probe * e, ahead = qp + probe * e;
+    vec3 before, after;
+    sdf(behind, before);
+    sdf(ahead, after);
+    const float down = dot3(before, e), up = dot3(after, e);
+    if (down < 0.0 && up > 0.0) {
+      const float a = up / (up - down);
+      w = a * before + (1.0 - a) * after;
+      w -= dot3(w, e) * e;
+    }
+#endif
     const float across = length3(w);
     if (!(across > DRAPE_FEATURE_MIN_RATE)) return depth;
     u = w / across;

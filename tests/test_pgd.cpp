@@ -634,15 +634,15 @@ TEMPLATE_TEST_CASE("a face on a box's corner or edge is pushed clear along its o
                 sizeof(S) == 4 ? "float" : "double", corner ? "corner" : "edge", cases, inside, onEdge,
                 double(worstAligned), double(worstGradient), double(thickness));
     // Measured (float and double): over the corner 4.89 mm of the 5 mm clearance with the aligned push, -0.21 /
-    // -0.03 mm (the corner still inside the solid) along the gradient; over the edge 1.9-2.0 mm against 0.64 /
-    // -0.28 mm. Across an edge of the face the push is not the shortest one (that would be across both the
-    // face's edge and the box's), so it clears part of the thickness only.
+    // -0.03 mm (the corner still inside the solid) along the gradient; over the edge 4.57 mm against 0.64 /
+    // -0.28 mm. Over the edge, the gradient without its part along the face's edge (the push before it mixed the
+    // gradients to either side of the point) cleared 1.9-2.0 mm only: it is not across the box's edge.
     CHECK(cases >= trials / 2);
     if (corner) {
       CHECK(worstAligned >= S(0.95) * thickness);
       CHECK(worstGradient < S(0.5) * thickness);
     } else {
-      CHECK(worstAligned >= S(0.3) * thickness);
+      CHECK(worstAligned >= S(0.9) * thickness);
       CHECK(worstGradient < S(0.2) * thickness);
     }
   }

@@ -55,6 +55,9 @@ inline constexpr double kFeatureBarycentric = 1e-3;
 inline constexpr double kFeatureInteriorCos = 0.99;
 /// On an edge, a field gradient whose component along the edge is below this is kept.
 inline constexpr double kFeatureEdgeSine = 0.05;
+/// On an edge of a face, on a field with edges, the gradient is also read this far (a fraction of the edge's
+/// length) to either side of the deepest point along the edge.
+inline constexpr double kFeatureEdgeProbe = 0.05;
 /// Newton steps that carry the deepest point to the thickness along the new direction.
 inline constexpr int kFeatureNewtonSteps = 2;
 /// The new direction is used, and a Newton step taken, only where the field grows at least this fast along it.

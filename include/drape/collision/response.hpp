@@ -303,6 +303,23 @@ S featureAlignedPush(const Sdf<Shape, S>& sdf, const Vec3<S>& x0, const Vec3<S>&
     const S along = q.normal.dot(e);
     if (std::abs(along) <= S(constants::kFeatureEdgeSine)) return depth;
     u = q.normal - along * e;
+    if constexpr (!requires { Sdf<Shape, S>::kSmooth; }) {
+      // Where the edge crosses an edge of the solid, the deepest point sits on the kink between two of its sides,
+      // and the gradient there is whichever side is nearer. The gradients a little to either side of it, g- and
+      // g+, are the two sides': the mix of them with no part along the edge is the push across both edges, the
+      // same whichever side the search ended on.
+      const S probe = S(constants::kFeatureEdgeProbe) * length;
+      Vec3<S> before, after;
+      sdf(Vec3<S>(q.point - probe * e), before);
+      sdf(Vec3<S>(q.point + probe * e), after);
+      evaluations += 2;
+      const S down = before.dot(e), up = after.dot(e);
+      if (down < S(0) && up > S(0)) {
+        const S a = up / (up - down);
+        u = a * before + (S(1) - a) * after;
+        u -= u.dot(e) * e;
+      }
+    }
     const S across = u.norm();
     if (!(across > S(constants::kFeatureMinRate))) return depth;
     u /= across;

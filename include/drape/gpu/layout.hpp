@@ -278,6 +278,7 @@ inline std::string preamble(const std::string& defines = {}) {
   s += define("DRAPE_FEATURE_BARYCENTRIC", constants::kFeatureBarycentric);
   s += define("DRAPE_FEATURE_INTERIOR_COS", constants::kFeatureInteriorCos);
   s += define("DRAPE_FEATURE_EDGE_SINE", constants::kFeatureEdgeSine);
+  s += define("DRAPE_FEATURE_EDGE_PROBE", constants::kFeatureEdgeProbe);
   s += define("DRAPE_FEATURE_NEWTON_STEPS", constants::kFeatureNewtonSteps);
   s += define("DRAPE_FEATURE_MIN_RATE", constants::kFeatureMinRate);
   s += define("DRAPE_PINCH_RATE", constants::kPinchRate);

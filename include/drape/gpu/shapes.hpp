@@ -32,9 +32,12 @@ template <class Shape> constexpr layout::ShapeCode shapeCode() {
   else return layout::kGridShape;
 }
 
-/// The #define that compiles a collision kernel for the shape.
+/// The #defines that compile a collision kernel for the shape: which field, and whether it has no edges
+/// (Sdf<Shape, S>::kSmooth).
 template <class Shape> std::string shapeDefine() {
-  return "#define DRAPE_SHAPE " + std::to_string(int(shapeCode<Shape>())) + "\n";
+  constexpr bool kSmooth = requires { Sdf<Shape, float>::kSmooth; };
+  return "#define DRAPE_SHAPE " + std::to_string(int(shapeCode<Shape>())) + "\n#define DRAPE_SMOOTH_FIELD " +
+         std::to_string(int(kSmooth)) + "\n";
 }
 
 using PackedShape = std::array<Eigen::Vector4f, 5>;
