@@ -274,7 +274,8 @@ DRAPE_ALWAYS_INLINE void keepTurnAbout(const Sdf<Shape, S>& sdf, const SolidMoti
 /// substep and throws the face sideways off the feature, so a cloth over a ridge never rests. A rigid contact
 /// of a solid's corner or edge on a flat face takes the face's normal; so does this one. A deepest point inside
 /// the face is pushed along the face's normal, one on an edge of the face across that edge (the gradient
-/// without its part along the edge); one at a corner of the face keeps the gradient. On a smooth field the
+/// without its part along the edge; on a field with edges, the gradients to either side of the point mixed so,
+/// which is across the solid's edge too); one at a corner of the face keeps the gradient. On a smooth field the
 /// deepest point already has its gradient along the face's normal (inside) or across the edge (on it), so
 /// nothing changes there: only a gradient further off than kFeatureInteriorCos or kFeatureEdgeSine is replaced.
 /// The push then carries the deepest point to the thickness along the new direction, by Newton steps on
