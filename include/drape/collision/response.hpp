@@ -304,7 +304,7 @@ S featureAlignedPush(const Sdf<Shape, S>& sdf, const Vec3<S>& x0, const Vec3<S>&
     const S along = q.normal.dot(e);
     if (std::abs(along) <= S(constants::kFeatureEdgeSine)) return depth;
     u = q.normal - along * e;
-    if constexpr (!requires { Sdf<Shape, S>::kSmooth; }) {
+    if constexpr (!kSmoothField<Shape, S>) {
       // Where the edge crosses an edge of the solid, the deepest point sits on the kink between two of its sides,
       // and the gradient there is whichever side is nearer. The gradients a little to either side of it, g- and
       // g+, are the two sides': the mix of them with no part along the edge is the push across both edges, the
@@ -512,7 +512,7 @@ VertexPassShare<S> projectVertexContacts(Index begin, Index end, const CompiledS
                                          Vec3<S>* x, const S* invMass, Ids ids, ContactBuffer<S>& contacts,
                                          const Vec3<S>* binned, S slack = S(0), const SweepInputs<S>& sweep = {},
                                          Vec3<S>* keepTurn = nullptr) {
-  if constexpr (requires { Sdf<Shape, S>::kSmooth; }) {
+  if constexpr (kSmoothField<Shape, S>) {
     if (keepTurn != nullptr && solid.motion.body < 0)
       return projectVertexContactsAs<false, kSweep, true>(begin, end, solid, thickness, x, invMass, ids, contacts,
                                                           binned, slack, sweep, keepTurn);
@@ -650,9 +650,8 @@ S projectFaceContacts(const CompiledSolid<Shape, S>& solid, S thickness, int pgd
                       const S* invMass, ContactBuffer<S>& contacts, CollisionStats& stats, const Vec3<S>* binned,
                       bool exactSearch = true, const SweepInputs<S>& sweep = {}, bool ownNormals = false,
                       Vec3<S>* keepTurn = nullptr) {
-  constexpr bool kSmooth = requires { Sdf<Shape, S>::kSmooth; };
   const bool body = solid.motion.body >= 0;
-  if constexpr (kSmooth) {
+  if constexpr (kSmoothField<Shape, S>) {
     if (ownNormals && !body)
       return projectFaceContactsAs<kCull, false, kBoxed, kSweep, true>(solid, thickness, pgdIterations, triangles,
                                                                        ids, count, x, invMass, contacts, stats,

@@ -33,11 +33,10 @@ template <class Shape> constexpr layout::ShapeCode shapeCode() {
 }
 
 /// The #defines that compile a collision kernel for the shape: which field, and whether it has no edges
-/// (Sdf<Shape, S>::kSmooth).
+/// (kSmoothField).
 template <class Shape> std::string shapeDefine() {
-  constexpr bool kSmooth = requires { Sdf<Shape, float>::kSmooth; };
   return "#define DRAPE_SHAPE " + std::to_string(int(shapeCode<Shape>())) + "\n#define DRAPE_SMOOTH_FIELD " +
-         std::to_string(int(kSmooth)) + "\n";
+         std::to_string(int(kSmoothField<Shape, float>)) + "\n";
 }
 
 using PackedShape = std::array<Eigen::Vector4f, 5>;

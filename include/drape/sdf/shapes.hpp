@@ -13,6 +13,8 @@
 namespace drape {
 
 template <class Shape, Scalar S> struct Sdf;
+/// A field with no edges (its Sdf declares kSmooth): the gradient turns smoothly along the surface and never flips.
+template <class Shape, Scalar S> inline constexpr bool kSmoothField = requires { Sdf<Shape, S>::kSmooth; };
 
 template <Scalar S> struct Sdf<Plane, S> {
   static constexpr bool kLinear = true;  ///< phi is linear: its minimum over a face is at a vertex
