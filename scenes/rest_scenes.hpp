@@ -51,8 +51,10 @@ template <class Shape> Distance fieldOf(const Solid<Shape>& solid) {
 }
 
 /// The scene's cloth and solid in a solver with the given method and substeps (the rest of Settings at its
-/// defaults), and in `distance` the solid's field.
-template <class S> Solver<S> makeRestScene(RestScene scene, CollisionMethod method, int substeps, Distance& distance) {
+/// defaults), and in `distance` the solid's field. `shift` moves the cloth's start in x and y (m).
+template <class S>
+Solver<S> makeRestScene(RestScene scene, CollisionMethod method, int substeps, Distance& distance,
+                        const Eigen::Vector2d& shift = Eigen::Vector2d::Zero()) {
   constexpr double kFriction = 0.5;
   if (scene == RestScene::Ridge) {  // the slope sample's ridge: inclined_plane --ridge --nx 40 --ny 40
     SlopeConfig c;
@@ -61,6 +63,7 @@ template <class S> Solver<S> makeRestScene(RestScene scene, CollisionMethod meth
     c.nx = c.ny = 40;
     c.subSteps = substeps;
     c.method = method;
+    c.shift = shift;
     distance = fieldOf(slopeParts<S>(c).ridge);
     return makeSlope<S>(c);
   }
@@ -72,7 +75,8 @@ template <class S> Solver<S> makeRestScene(RestScene scene, CollisionMethod meth
   sheet.nx = sheet.ny = 40;
   sheet.spacing = 0.02;
   // Off-centre by part of a cell, so no vertex sits exactly on the top of the solid.
-  sheet.placement.position = {0.01, -0.02, scene == RestScene::Ball ? 0.21 : scene == RestScene::Rod ? 0.1 : 0.0};
+  sheet.placement.position = {0.01 + shift.x(), -0.02 + shift.y(),
+                              scene == RestScene::Ball ? 0.21 : scene == RestScene::Rod ? 0.1 : 0.0};
   Solver<S> solver(std::make_shared<const ClothAsset<S>>(ClothAsset<S>::sheet(sheet)), settings);
   if (scene == RestScene::Corner) {  // a 0.4 m cube, the diagonal through one corner vertical, that corner 1 cm below
     Solid<Box> cube;

@@ -36,6 +36,8 @@ struct SlopeConfig {
   /// runs along x on top (at height 0) with faces falling 45 degrees to each side; `angleDeg` is then unused and
   /// the friction is the ridge's. The cloth starts `gap` above the edge and should come to rest hanging over it.
   bool ridge = false;
+  /// m, the cloth's start moved across the slope (x) and up or down it (y)
+  Eigen::Vector2d shift = Eigen::Vector2d::Zero();
   double areaDensity = 0.1;    ///< kg/m^2
   double windowStart = 0.5;    ///< metrics use frames from this fraction of the run to its end
   bool penetrationEverySubstep = false;  ///< measure penetration after every substep (slow), else every frame
@@ -111,7 +113,7 @@ template <Scalar S> SlopeParts<S> slopeParts(const SlopeConfig& c) {
   grid.ny = c.ny;
   grid.spacing = c.spacing;
   const double halfY = 0.5 * (c.ny - 1) * c.spacing;
-  grid.placement.position = Eigen::Vector3d(0, 0, c.ridge ? c.gap : halfY * std::tan(theta) + c.gap);
+  grid.placement.position = Eigen::Vector3d(c.shift.x(), c.shift.y(), c.ridge ? c.gap : halfY * std::tan(theta) + c.gap);
   SlopeParts<S> parts;
   parts.asset = std::make_shared<const ClothAsset<S>>(ClothAsset<S>::sheet(grid));
   parts.settings = c.base;
