@@ -123,44 +123,37 @@ int main(int argc, char** argv) {
                 iterations, airDamping, placements, seconds, kAtRest);
     std::printf("| scene | substeps | method | scalar | at rest | median | worst | median within 2 cm |\n");
     std::printf("|---|---:|---|---|---:|---:|---:|---:|\n");
-    for (RestScene scene : {RestScene::Ridge, RestScene::Corner, RestScene::Rod, RestScene::Ball})
-      for (int n : substeps)
-        for (CollisionMethod m : {CollisionMethod::Faces, CollisionMethod::InSolve, CollisionMethod::Vertices})
-          for (bool isFloat : {true, false}) {
-            std::vector<double> all, near;
-            for (int k = 0; k < placements; ++k) {
-              const Reading r = isFloat ? run<float>(scene, m, n, iterations, airDamping, seconds, k)
-                                        : run<double>(scene, m, n, iterations, airDamping, seconds, k);
-              all.push_back(r.rms[2]);
-              near.push_back(r.nearRms);
-            }
-            const auto resting = std::count_if(all.begin(), all.end(), [](double v) { return v <= kAtRest; });
-            auto median = [](std::vector<double> v) {
-              std::sort(v.begin(), v.end());
-              return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
-            };
-            std::printf("| %s | %d | %s | %s | %d of %d | %.1e | %.1e | %.1e |\n", scenes::name(scene), n,
-                        toString(m), isFloat ? "float" : "double", int(resting), placements, median(all),
-                        *std::max_element(all.begin(), all.end()), median(near));
-            std::fflush(stdout);
-          }
-    return 0;
+  } else {
+    std::printf("%d solver iteration(s) per substep, air damping %g/s. RMS speed of all vertices (m/s) after %g, %g "
+                "and %g s; the lowest vertex at the end (m).\n\n",
+                iterations, airDamping, seconds / 4, seconds / 2, seconds);
+    std::printf("| scene | substeps | method | scalar | RMS at %g s | at %g s | at %g s | within 2 cm at %g s | lowest |\n",
+                seconds / 4, seconds / 2, seconds, seconds);
+    std::printf("|---|---:|---|---|---:|---:|---:|---:|---:|\n");
   }
-  std::printf("%d solver iteration(s) per substep, air damping %g/s. RMS speed of all vertices (m/s) after %g, %g "
-              "and %g s; the lowest vertex at the end (m).\n\n",
-              iterations, airDamping, seconds / 4, seconds / 2, seconds);
-  std::printf("| scene | substeps | method | scalar | RMS at %g s | at %g s | at %g s | within 2 cm at %g s | lowest |\n",
-              seconds / 4, seconds / 2, seconds, seconds);
-  std::printf("|---|---:|---|---|---:|---:|---:|---:|---:|\n");
+  auto median = [](std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+  };
   for (RestScene scene : {RestScene::Ridge, RestScene::Corner, RestScene::Rod, RestScene::Ball})
     for (int n : substeps)
       for (CollisionMethod m : {CollisionMethod::Faces, CollisionMethod::InSolve, CollisionMethod::Vertices})
         for (bool isFloat : {true, false}) {
-          const Reading r =
-              isFloat ? run<float>(scene, m, n, iterations, airDamping, seconds)
-                      : run<double>(scene, m, n, iterations, airDamping, seconds);
-          std::printf("| %s | %d | %s | %s | %.1e | %.1e | %.1e | %.1e | %.3f |\n", scenes::name(scene), n, toString(m),
-                      isFloat ? "float" : "double", r.rms[0], r.rms[1], r.rms[2], r.nearRms, r.lowest);
+          std::vector<Reading> readings;
+          for (int k = 0; k < placements; ++k)
+            readings.push_back(isFloat ? run<float>(scene, m, n, iterations, airDamping, seconds, k)
+                                       : run<double>(scene, m, n, iterations, airDamping, seconds, k));
+          std::printf("| %s | %d | %s | %s |", scenes::name(scene), n, toString(m), isFloat ? "float" : "double");
+          if (placements > 1) {
+            std::vector<double> all, near;
+            for (const Reading& r : readings) all.push_back(r.rms[2]), near.push_back(r.nearRms);
+            const auto resting = std::count_if(all.begin(), all.end(), [](double v) { return v <= kAtRest; });
+            std::printf(" %d of %d | %.1e | %.1e | %.1e |\n", int(resting), placements, median(all),
+                        *std::max_element(all.begin(), all.end()), median(near));
+          } else {
+            const Reading& r = readings[0];
+            std::printf(" %.1e | %.1e | %.1e | %.1e | %.3f |\n", r.rms[0], r.rms[1], r.rms[2], r.nearRms, r.lowest);
+          }
           std::fflush(stdout);
         }
   return 0;
