@@ -1,6 +1,7 @@
 // Rest at few substeps (docs/design.md, Known limits): a 40x40 cloth (2 cm) that should come to rest on a solid,
 // stepped at 60 Hz for a while, and the RMS speed of all its vertices read at a quarter, half and all of the run,
-// and at the end that of the vertices within 2 cm of the solid.
+// and at the end that of the vertices within 2 cm of the solid, with the time per frame (one thread, the whole run:
+// landing included), so that a setting's rest and its price are read side by side.
 // The scenes are the ones where drape's contacts are hardest to bring to rest: a ridge (the slope sample's box
 // turned 45 degrees, an edge on top, mu 0.5), a cube standing on a corner (mu 0.5), a 3 mm rod (a capsule,
 // mu 0.5, continuous contact on) and a 0.2 m ball (mu 0.5), each for every collision method, float and double.
@@ -16,6 +17,7 @@
 #include <rest_scenes.hpp>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -35,6 +37,7 @@ struct Reading {
   double rms[3] = {0, 0, 0};
   double nearRms = 0;
   double lowest = 0;
+  double msPerFrame = 0;  ///< the whole run's stepping time over its frames, landing included
 };
 
 /// Placement k's shift of the cloth's start (m): none for the first, then the points of an additive recurrence
@@ -61,11 +64,15 @@ Reading run(RestScene scene, CollisionMethod method, int substeps, int iteration
   const int frames = int(seconds * 60 + 0.5);
   const int marks[3] = {frames / 4, frames / 2, frames};
   Reading r;
+  double stepping = 0;
   for (int f = 1; f <= frames; ++f) {
+    const auto start = std::chrono::steady_clock::now();
     solver.step(1.0 / 60.0);
+    stepping += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     for (int k = 0; k < 3; ++k)
       if (f == marks[k]) r.rms[k] = scenes::rmsSpeed(solver);
   }
+  r.msPerFrame = stepping / frames;
   r.nearRms = scenes::rmsSpeedNear(solver, distance, kNear);
   r.lowest = 1e300;
   for (Index i = 0; i < solver.vertexCount(); ++i) r.lowest = std::min(r.lowest, solver.position(i).z());
@@ -119,17 +126,19 @@ int main(int argc, char** argv) {
   if (placements > 1) {
     std::printf("%d solver iteration(s) per substep, air damping %g/s, %d placements of the cloth. After %g s: how "
                 "many are at rest (RMS speed of all vertices at most %g m/s), the median and the worst RMS speed "
-                "(m/s), and the median within 2 cm of the solid.\n\n",
+                "(m/s), the median within 2 cm of the solid, and the median time per frame (ms, landing "
+                "included).\n\n",
                 iterations, airDamping, placements, seconds, kAtRest);
-    std::printf("| scene | substeps | method | scalar | at rest | median | worst | median within 2 cm |\n");
-    std::printf("|---|---:|---|---|---:|---:|---:|---:|\n");
+    std::printf("| scene | substeps | method | scalar | at rest | median | worst | median within 2 cm | ms per frame |\n");
+    std::printf("|---|---:|---|---|---:|---:|---:|---:|---:|\n");
   } else {
     std::printf("%d solver iteration(s) per substep, air damping %g/s. RMS speed of all vertices (m/s) after %g, %g "
-                "and %g s; the lowest vertex at the end (m).\n\n",
+                "and %g s; the lowest vertex at the end (m); the time per frame (ms, landing included).\n\n",
                 iterations, airDamping, seconds / 4, seconds / 2, seconds);
-    std::printf("| scene | substeps | method | scalar | RMS at %g s | at %g s | at %g s | within 2 cm at %g s | lowest |\n",
+    std::printf("| scene | substeps | method | scalar | RMS at %g s | at %g s | at %g s | within 2 cm at %g s | lowest | "
+                "ms per frame |\n",
                 seconds / 4, seconds / 2, seconds, seconds);
-    std::printf("|---|---:|---|---|---:|---:|---:|---:|---:|\n");
+    std::printf("|---|---:|---|---|---:|---:|---:|---:|---:|---:|\n");
   }
   auto median = [](std::vector<double> v) {
     std::sort(v.begin(), v.end());
@@ -145,14 +154,16 @@ int main(int argc, char** argv) {
                                        : run<double>(scene, m, n, iterations, airDamping, seconds, k));
           std::printf("| %s | %d | %s | %s |", scenes::name(scene), n, toString(m), isFloat ? "float" : "double");
           if (placements > 1) {
-            std::vector<double> all, near;
-            for (const Reading& r : readings) all.push_back(r.rms[2]), near.push_back(r.nearRms);
+            std::vector<double> all, near, times;
+            for (const Reading& r : readings)
+              all.push_back(r.rms[2]), near.push_back(r.nearRms), times.push_back(r.msPerFrame);
             const auto resting = std::count_if(all.begin(), all.end(), [](double v) { return v <= kAtRest; });
-            std::printf(" %d of %d | %.1e | %.1e | %.1e |\n", int(resting), placements, median(all),
-                        *std::max_element(all.begin(), all.end()), median(near));
+            std::printf(" %d of %d | %.1e | %.1e | %.1e | %.2f |\n", int(resting), placements, median(all),
+                        *std::max_element(all.begin(), all.end()), median(near), median(times));
           } else {
             const Reading& r = readings[0];
-            std::printf(" %.1e | %.1e | %.1e | %.1e | %.3f |\n", r.rms[0], r.rms[1], r.rms[2], r.nearRms, r.lowest);
+            std::printf(" %.1e | %.1e | %.1e | %.1e | %.3f | %.2f |\n", r.rms[0], r.rms[1], r.rms[2], r.nearRms, r.lowest,
+                        r.msPerFrame);
           }
           std::fflush(stdout);
         }
