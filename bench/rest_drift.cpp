@@ -53,8 +53,8 @@ Eigen::Vector2d shiftOf(int k) {
 constexpr double kAtRest = 1e-4;
 
 template <class S>
-Reading run(RestScene scene, CollisionMethod method, int substeps, int iterations, double airDamping,
-            double seconds, int placement = 0) {
+Reading run(RestScene scene, CollisionMethod method, int substeps, int iterations, double airDamping, double seconds,
+            int placement = 0) {
   scenes::Distance distance;
   Solver<S> solver = scenes::makeRestScene<S>(scene, method, substeps, distance, shiftOf(placement));
   Settings settings = solver.settings();
@@ -124,20 +124,24 @@ int main(int argc, char** argv) {
       return 2;
     }
   if (placements > 1) {
-    std::printf("%d solver iteration(s) per substep, air damping %g/s, %d placements of the cloth. After %g s: how "
-                "many are at rest (RMS speed of all vertices at most %g m/s), the median and the worst RMS speed "
-                "(m/s), the median within 2 cm of the solid, and the median time per frame (ms, landing "
-                "included).\n\n",
-                iterations, airDamping, placements, seconds, kAtRest);
-    std::printf("| scene | substeps | method | scalar | at rest | median | worst | median within 2 cm | ms per frame |\n");
+    std::printf(
+        "%d solver iteration(s) per substep, air damping %g/s, %d placements of the cloth. After %g s: how "
+        "many are at rest (RMS speed of all vertices at most %g m/s), the median and the worst RMS speed "
+        "(m/s), the median within 2 cm of the solid, and the median time per frame (ms, landing "
+        "included).\n\n",
+        iterations, airDamping, placements, seconds, kAtRest);
+    std::printf(
+        "| scene | substeps | method | scalar | at rest | median | worst | median within 2 cm | ms per frame |\n");
     std::printf("|---|---:|---|---|---:|---:|---:|---:|---:|\n");
   } else {
-    std::printf("%d solver iteration(s) per substep, air damping %g/s. RMS speed of all vertices (m/s) after %g, %g "
-                "and %g s; the lowest vertex at the end (m); the time per frame (ms, landing included).\n\n",
-                iterations, airDamping, seconds / 4, seconds / 2, seconds);
-    std::printf("| scene | substeps | method | scalar | RMS at %g s | at %g s | at %g s | within 2 cm at %g s | lowest | "
-                "ms per frame |\n",
-                seconds / 4, seconds / 2, seconds, seconds);
+    std::printf(
+        "%d solver iteration(s) per substep, air damping %g/s. RMS speed of all vertices (m/s) after %g, %g "
+        "and %g s; the lowest vertex at the end (m); the time per frame (ms, landing included).\n\n",
+        iterations, airDamping, seconds / 4, seconds / 2, seconds);
+    std::printf(
+        "| scene | substeps | method | scalar | RMS at %g s | at %g s | at %g s | within 2 cm at %g s | lowest | "
+        "ms per frame |\n",
+        seconds / 4, seconds / 2, seconds, seconds);
     std::printf("|---|---:|---|---|---:|---:|---:|---:|---:|---:|\n");
   }
   auto median = [](std::vector<double> v) {
@@ -162,8 +166,8 @@ int main(int argc, char** argv) {
                         *std::max_element(all.begin(), all.end()), median(near), median(times));
           } else {
             const Reading& r = readings[0];
-            std::printf(" %.1e | %.1e | %.1e | %.1e | %.3f | %.2f |\n", r.rms[0], r.rms[1], r.rms[2], r.nearRms, r.lowest,
-                        r.msPerFrame);
+            std::printf(" %.1e | %.1e | %.1e | %.1e | %.3f | %.2f |\n", r.rms[0], r.rms[1], r.rms[2], r.nearRms,
+                        r.lowest, r.msPerFrame);
           }
           std::fflush(stdout);
         }
