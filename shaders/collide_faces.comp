@@ -598,6 +598,38 @@ float featureAlignedPush(vec3 x0, vec3 x1, vec3 x2, float depth, vec3 qb, vec3 q
   return max(s, 0.0);
 }
 
+#if DRAPE_GUARD
+// Continuous contact's friction guard (markFrictionCrossings in include/drape/collision/sweep.hpp), over every face
+// in any order: a face with a corner position friction moved further than the thickness uniform (the guard's
+// reach), whose path from before friction came within the reach of the solid after its start, and which the solid
+// then pierces where friction left it, marks its corners. Every mark is the
+// same 1, so faces that share a corner need no order; restore_marked puts the marked corners back.
+layout(std430, binding = DRAPE_B_GUARD_FROM) readonly buffer GuardFrom { vec4 before[]; };
+layout(std430, binding = DRAPE_B_GUARD_MARKS) buffer GuardMarks { uint marks[]; };
+
+void main() {
+  if (gl_GlobalInvocationID.x >= count) return;
+  const uvec4 t = faces[first + gl_GlobalInvocationID.x];
+  const vec3 a0 = before[t.x].xyz, a1 = before[t.y].xyz, a2 = before[t.z].xyz;
+  const vec3 b0 = x[t.x].xyz, b1 = x[t.y].xyz, b2 = x[t.z].xyz;
+  precise const vec3 d0 = b0 - a0, d1 = b1 - a1, d2 = b2 - a2;
+  if (!(max(max(dot3(d0, d0), dot3(d1, d1)), dot3(d2, d2)) > thickness * thickness)) return;
+  precise const vec3 low = boxLow - vec3(thickness), high = boxHigh + vec3(thickness);
+  const vec3 pathLow = min(min(min(a0, a1), min(a2, b0)), min(b1, b2));
+  const vec3 pathHigh = max(max(max(a0, a1), max(a2, b0)), max(b1, b2));
+  if (!(all(greaterThanEqual(pathHigh, low)) && all(lessThanEqual(pathLow, high)))) return;
+  vec3 hb, hn, hp;
+  float hphi, when;
+  if (!(sweepFace(a0, a1, a2, b0, b1, b2, hb, hn, hp, hphi, when) && when > 0.0)) return;
+  vec3 eb, en, ep;
+  float ephi;
+  if (searchFace(b0, b1, b2, thickness, eb, en, ep, ephi) && ephi < 0.0) {
+    marks[t.x] = 1u;
+    marks[t.y] = 1u;
+    marks[t.z] = 1u;
+  }
+}
+#else
 void main() {
   if (gl_GlobalInvocationID.x >= count) return;
   const uvec4 t = faces[first + gl_GlobalInvocationID.x];
@@ -679,3 +711,4 @@ void main() {
     contacts[vi] = ct;
   }
 }
+#endif

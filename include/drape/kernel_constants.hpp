@@ -71,6 +71,9 @@ inline constexpr double kSweepGate = 0.5;
 inline constexpr int kSweepSteps = 64;
 /// Most face searches along one face's sweep.
 inline constexpr int kFaceSweepSteps = 32;
+/// Position friction may carry a face along a solid but not within this share of the thickness of it: a face
+/// whose corners friction moved and whose path came that close goes back (the friction guard).
+inline constexpr double kFrictionGuard = 0.5;
 
 // Several solids meeting (docs/design.md §16).
 /// Extra vertex passes on the true fields where solids meet.

@@ -132,6 +132,12 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     passes_.prepare(settings_.broadPhase && has.bounded > 0, coupled_);
     // Continuous contact needs the start positions, and only a bounded solid (not a half-space) can be crossed.
     sweep_ = settings_.continuousContact && settings_.collisionMethod != CollisionMethod::InSolve && has.bounded > 0;
+    // Position friction must not carry a face across a solid: continuous contact with faces guards it.
+    guard_ = sweep_ && hasFriction_ && settings_.collisionMethod == CollisionMethod::Faces;
+    if (guard_ && guardMarks_.size() != state_.x.size()) {
+      xBeforeFriction_.resize(state_.x.size());
+      guardMarks_.assign(state_.x.size(), 0);
+    }
     if (coupled_ && vStart_.size() != state_.v.size()) {
       vStart_.resize(state_.v.size());
       vPre_.resize(state_.v.size());
@@ -445,12 +451,14 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     // on any number of threads.
     const SimdLevel level = simdLevelFor<S>(bestSimdLevel());
     const Index n = vertexCount();
+    if (guard_) teamFor(n, [&](Index b, Index e) { std::copy(x + b, x + e, xBeforeFriction_.data() + b); });
     withFlags([&](auto friction) {
       teamFor((n + 7) / 8, [&](Index b, Index e) {
         respondContacts<friction()>(8 * b, std::min(8 * e, n), passes_.contacts(), x, xPrev_.data(), v, h, damping,
                                     level);
       });
     }, hasFriction_);
+    if (guard_) guardFriction();
     if (!(faces && settings_.propagationRings > 0 && settings_.propagationWeight > 0)) return;
     DRAPE_OMP(single)
     propagation_.beginPass();
@@ -465,6 +473,42 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     }, keepSpin_);
   }
 
+  /// Continuous contact's friction guard (markFrictionCrossings, docs/design.md §18): against every bounded
+  /// curved solid, the faces that position friction carried within kFrictionGuard of the thickness of it mark
+  /// their corners, which go back to where the contact passes left them. Their velocities keep the response's.
+  void guardFriction() {
+    DRAPE_OMP(single)
+    guardFrictionAlone();
+  }
+  /// guardFriction's work, on the one thread that does it.
+  void guardFrictionAlone() {
+    const Vec3<S>* x = state_.x.data();
+    const S reach = S(constants::kFrictionGuard) * S(settings_.thickness);
+    // Only a face with a corner friction moved further than the reach is swept: where none did (a resting or
+    // slowly sliding cloth) one pass over the vertices is all the guard costs.
+    bool far = false;
+    for (std::size_t i = 0; i < xBeforeFriction_.size() && !far; ++i)
+      far = (x[i] - xBeforeFriction_[i]).squaredNorm() > reach * reach;
+    if (!far) return;
+    const auto& triangles = asset_->triangles;
+    const Vec3<S>* before = xBeforeFriction_.data();
+    std::uint8_t* marks = guardMarks_.data();
+    const int iterations = settings_.pgdIterations;
+    const bool exact = settings_.exactGridSearch;
+    Index marked = 0;
+    forEachCompiled([&](const auto& list) {
+      for (const auto& solid : list)
+        if constexpr (!std::decay_t<decltype(solid.sdf)>::kLinear)
+          if (solid.bounded)
+            marked += markFrictionCrossings(solid.sdf, solid.boxLow, solid.boxHigh, triangles, before, x, reach,
+                                            iterations, exact, marks);
+    });
+    if (marked > 0) {
+      for (std::size_t i = 0; i < guardMarks_.size(); ++i)
+        if (guardMarks_[i] != 0) state_.x[i] = xBeforeFriction_[i], guardMarks_[i] = 0;
+      passes_.addFrictionGuarded(marked);
+    }
+  }
 
   std::vector<PinTarget<S>> pinLocal_;
   std::vector<Vec3<S>> xPrev_, xPredicted_;
@@ -482,6 +526,9 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
   bool coupled_ = false;      ///< some solid is a dynamic body this substep
   std::exception_ptr teamError_;  ///< what a body threw inside the threads' team, rethrown after it
   bool sweep_ = false;        ///< continuous contact searches the paths this substep (a bounded solid exists)
+  bool guard_ = false;        ///< and friction's moves are guarded (guardFriction)
+  std::vector<Vec3<S>> xBeforeFriction_;  ///< the positions the contact passes left, for the guard
+  std::vector<std::uint8_t> guardMarks_;  ///< the guard's marks, cleared as they are undone
   S travel_ = 0;              ///< the substep's farthest vertex travel (shared by the team)
   bool massesChanged_ = false;  ///< an inverse mass changed since the lane copies were gathered
   std::vector<Vec3<S>> vStart_, vPre_;                  ///< velocities at the substep's start, before contacts

@@ -10,6 +10,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cstring>
 #include <random>
 #include <memory>
@@ -47,6 +48,32 @@ TEST_CASE("face colours share no vertex and hold every face once", "[gpu]") {
 
 namespace {
 
+/// The flat 30 x 30 cloth (2 cm spacing) the face kernels are compared on.
+drape::ClothAsset<float> kernelSheet() {
+  drape::SheetDesc g;
+  g.nx = g.ny = 30;
+  g.spacing = 0.02;
+  return drape::ClothAsset<float>::sheet(g);
+}
+
+/// Positions as the GPU holds them, with each vertex's inverse mass in w.
+std::vector<layout::Vertex> gpuVertices(const std::vector<Vec3<float>>& p, const std::vector<float>& invMass) {
+  std::vector<layout::Vertex> v(p.size());
+  for (std::size_t i = 0; i < p.size(); ++i) v[i] = {p[i].x(), p[i].y(), p[i].z(), invMass[i]};
+  return v;
+}
+
+/// A grid field's nodes uploaded to `data` and bound where the kernels read them; nothing for an analytic shape.
+template <class Shape>
+void bindShapeData(const drape::Solid<Shape>& placed, drape::gpu::Buffer<layout::Vertex>& data) {
+  if constexpr (std::is_same_v<Shape, drape::MeshShape>) {
+    std::vector<layout::Vertex> v;
+    for (const auto& node : placed.shape.grid->nodes) v.push_back({node.x(), node.y(), node.z(), node.w()});
+    data.assign(v);
+    data.bind(layout::kShapeData);
+  }
+}
+
 /// The asset's indices of colour c's faces, in the colour's order (the CPU's reference visits them so).
 std::vector<Index> colourFaceIds(const drape::ClothAsset<float>& asset, const drape::gpu::FaceColours& coloured,
                                  std::size_t c) {
@@ -65,10 +92,7 @@ std::vector<Index> colourFaceIds(const drape::ClothAsset<float>& asset, const dr
 template <class Shape, class Place>
 void compareFacePass(Place&& place, float normalTolerance = 1e-6f, float depthTolerance = 1e-12f) {
   drape::test::gpuContext().makeCurrent();
-  drape::SheetDesc g;
-  g.nx = g.ny = 30;
-  g.spacing = 0.02;
-  const auto asset = drape::ClothAsset<float>::sheet(g);
+  const auto asset = kernelSheet();
   auto state = drape::ClothState<float>::fromAsset(asset, 0.1);
   for (Index i = 0; i < asset.vertexCount(); i += 11) state.invMass[std::size_t(i)] = 0;  // some fixed vertices
   const drape::Solid<Shape> placed = place(state.origin);
@@ -94,9 +118,7 @@ void compareFacePass(Place&& place, float normalTolerance = 1e-6f, float depthTo
   INFO(stats.faceContacts << " face contacts, " << searched << " faces searched");
 
   // The GPU.
-  std::vector<layout::Vertex> xv(x.size());
-  for (std::size_t i = 0; i < x.size(); ++i) xv[i] = {state.x[i].x(), state.x[i].y(), state.x[i].z(), state.invMass[i]};
-  drape::gpu::Buffer<layout::Vertex> gx(xv);
+  drape::gpu::Buffer<layout::Vertex> gx(gpuVertices(state.x, state.invMass));
   drape::gpu::Buffer<layout::Contact> gc(std::vector<layout::Contact>(x.size(), layout::Contact{}));
   drape::gpu::Buffer<std::array<std::uint32_t, 4>> gf(coloured.faces);
   gx.bind(layout::kPositions);
@@ -110,12 +132,7 @@ void compareFacePass(Place&& place, float normalTolerance = 1e-6f, float depthTo
     shapeData.assign(drape::gpu::packHull(*solid.sdf.hull));
     shapeData.bind(layout::kShapeData);
   }
-  if constexpr (std::is_same_v<Shape, drape::MeshShape>) {
-    std::vector<layout::Vertex> v;
-    for (const auto& node : placed.shape.grid->nodes) v.push_back({node.x(), node.y(), node.z(), node.w()});
-    shapeData.assign(v);
-    shapeData.bind(layout::kShapeData);
-  }
+  bindShapeData(placed, shapeData);
   k.set(layout::kSolidCentre, solid.motion.centre.x(), solid.motion.centre.y(), solid.motion.centre.z());
   k.set(layout::kSolidLinear, 0.0f, 0.0f, 0.0f);
   k.set(layout::kSolidAngular, 0.0f, 0.0f, 0.0f);
@@ -237,10 +254,7 @@ namespace {
 /// `place(origin)` gives, lying between where the cloth was and where it is.
 template <class Shape, class Place> void compareSweptPasses(Place&& place, double drop) {
   drape::test::gpuContext().makeCurrent();
-  drape::SheetDesc g;
-  g.nx = g.ny = 30;
-  g.spacing = 0.02;
-  const auto asset = drape::ClothAsset<float>::sheet(g);
+  const auto asset = kernelSheet();
   auto state = drape::ClothState<float>::fromAsset(asset, 0.1);
   for (Index i = 0; i < asset.vertexCount(); i += 11) state.invMass[std::size_t(i)] = 0;
   const std::vector<Vec3<float>> start = state.x;
@@ -273,12 +287,7 @@ template <class Shape, class Place> void compareSweptPasses(Place&& place, doubl
   REQUIRE(share.sweptFound + stats.sweepContacts >= 3);  // the passes under test did the work
 
   // The GPU.
-  auto vertices = [&](const std::vector<Vec3<float>>& p) {
-    std::vector<layout::Vertex> v(p.size());
-    for (std::size_t i = 0; i < p.size(); ++i) v[i] = {p[i].x(), p[i].y(), p[i].z(), state.invMass[i]};
-    return v;
-  };
-  drape::gpu::Buffer<layout::Vertex> gx(vertices(state.x)), gs(vertices(start));
+  drape::gpu::Buffer<layout::Vertex> gx(gpuVertices(state.x, state.invMass)), gs(gpuVertices(start, state.invMass));
   drape::gpu::Buffer<layout::Contact> gc(std::vector<layout::Contact>(x.size(), layout::Contact{}));
   drape::gpu::Buffer<std::array<std::uint32_t, 4>> gf(coloured.faces);
   drape::gpu::Buffer<std::uint32_t> flags(std::vector<std::uint32_t>(4, 0u));
@@ -288,12 +297,7 @@ template <class Shape, class Place> void compareSweptPasses(Place&& place, doubl
   gf.bind(layout::kFaces);
   flags.bind(layout::kFlags);
   drape::gpu::Buffer<layout::Vertex> shapeData;
-  if constexpr (std::is_same_v<Shape, drape::MeshShape>) {
-    std::vector<layout::Vertex> v;
-    for (const auto& node : placed.shape.grid->nodes) v.push_back({node.x(), node.y(), node.z(), node.w()});
-    shapeData.assign(v);
-    shapeData.bind(layout::kShapeData);
-  }
+  bindShapeData(placed, shapeData);
   auto common = [&](const drape::gpu::Program& k) {
     k.set(layout::kThickness, thickness);
     drape::gpu::setShape(k.id(), drape::gpu::packShape(solid.sdf));
@@ -394,6 +398,109 @@ TEST_CASE("continuous contact on the GPU: the swept vertex and face passes again
       s.pose.position = origin + Eigen::Vector3d(0.004, -0.003, -0.02);
       return s;
     }, 0.05);
+  }
+}
+
+namespace {
+
+/// Continuous contact's friction guard (docs/design.md §18), GPU against CPU: a flat 30 x 30 cloth (2 cm spacing)
+/// that friction slid `slide` metres along x, all but every seventh vertex, over the solid `place(origin)` gives.
+/// The faces whose path came within the guard's reach after its start, and which the solid pierces at the end,
+/// mark their corners (markFrictionCrossings; collide_faces.comp with DRAPE_GUARD), and the marked corners go back
+/// (restore_marked.comp): the same marks on both, and on the GPU exactly the marked corners back where friction
+/// found them, the marks cleared.
+template <class Shape, class Place> void compareFrictionGuard(Place&& place, double slide) {
+  drape::test::gpuContext().makeCurrent();
+  const auto asset = kernelSheet();
+  const auto state = drape::ClothState<float>::fromAsset(asset, 0.1);
+  const std::vector<Vec3<float>> before = state.x;
+  std::vector<Vec3<float>> after = before;
+  for (std::size_t i = 0; i < after.size(); ++i)
+    if (i % 7 != 0) after[i].x() += float(slide);
+  const drape::Solid<Shape> placed = place(state.origin);
+  const auto solid = drape::detail::compileSolid<Shape, float>(placed, state.origin);
+  const float reach = float(drape::constants::kFrictionGuard) * 0.005f;
+  const int iterations = 12;
+
+  std::vector<std::uint8_t> marks(after.size(), 0);
+  const Index caught = drape::markFrictionCrossings(solid.sdf, solid.boxLow, solid.boxHigh, asset.triangles,
+                                                    before.data(), after.data(), reach, iterations, true,
+                                                    marks.data());
+  const auto marked = std::count(marks.begin(), marks.end(), std::uint8_t(1));
+  INFO(caught << " faces caught, " << marked << " corners marked");
+  REQUIRE(caught >= 10);                                      // the guard has work here
+  REQUIRE(marked < std::ptrdiff_t(asset.vertexCount()) / 2);  // and leaves most of the cloth alone
+
+  std::vector<std::array<std::uint32_t, 4>> faces;
+  for (const auto& t : asset.triangles)
+    faces.push_back({std::uint32_t(t[0]), std::uint32_t(t[1]), std::uint32_t(t[2]), 0u});
+  drape::gpu::Buffer<layout::Vertex> gx(gpuVertices(after, state.invMass)), gFrom(gpuVertices(before, state.invMass));
+  drape::gpu::Buffer<std::uint32_t> gMarks(std::vector<std::uint32_t>(after.size(), 0u));
+  drape::gpu::Buffer<std::array<std::uint32_t, 4>> gf(faces);
+  gx.bind(layout::kPositions);
+  gFrom.bind(layout::kGuardFrom);
+  gMarks.bind(layout::kGuardMarks);
+  gf.bind(layout::kFaces);
+  drape::gpu::Buffer<layout::Vertex> shapeData;
+  bindShapeData(placed, shapeData);
+  drape::gpu::Program guard("collide_faces", drape::gpu::shaders::collide_faces,
+                            drape::gpu::shapeDefine<Shape>() + "#define DRAPE_GUARD 1\n");
+  guard.set(layout::kThickness, reach);
+  drape::gpu::setShape(guard.id(), drape::gpu::packShape(solid.sdf));
+  guard.set(layout::kBoxLow, solid.boxLow.x(), solid.boxLow.y(), solid.boxLow.z());
+  guard.set(layout::kBoxHigh, solid.boxHigh.x(), solid.boxHigh.y(), solid.boxHigh.z());
+  glProgramUniform1i(guard.id(), layout::kPgdIterations, iterations);
+  guard.set(layout::kFirst, 0u);
+  guard.set(layout::kCount, unsigned(faces.size()));
+  guard.dispatch(faces.size());
+  const std::vector<std::uint32_t> gpuMarks = gMarks.read();
+  int differ = 0;
+  for (std::size_t i = 0; i < marks.size(); ++i) differ += (gpuMarks[i] != 0u) != (marks[i] != 0);
+  CHECK(differ == 0);
+
+  drape::gpu::Program restore("restore_marked", drape::gpu::shaders::restore_marked);
+  restore.set(layout::kCount, unsigned(after.size()));
+  restore.dispatch(after.size());
+  const auto gpuX = gx.read();
+  const std::vector<std::uint32_t> cleared = gMarks.read();
+  int wrong = 0;
+  for (std::size_t i = 0; i < after.size(); ++i) {
+    const Vec3<float>& expected = marks[i] != 0 ? before[i] : after[i];
+    wrong += !(gpuX[i].x == expected.x() && gpuX[i].y == expected.y() && gpuX[i].z == expected.z() &&
+               gpuX[i].w == state.invMass[i]);
+  }
+  CHECK(wrong == 0);
+  CHECK(std::count(cleared.begin(), cleared.end(), 0u) == std::ptrdiff_t(cleared.size()));
+  std::printf("[gpu friction guard] %lld faces caught, %lld corners put back; marks that differ %d\n",
+              static_cast<long long>(caught), static_cast<long long>(marked), differ);
+}
+
+}  // namespace
+
+TEST_CASE("the friction guard on the GPU: the faces it catches and the corners it puts back, against the CPU's",
+          "[gpu]") {
+  SECTION("a 3 mm capsule through the cloth, its axis 1 mm under it, slid 3 cm across") {
+    // Faces the rod starts in are left to the contact passes; those that slide onto it come within the reach on
+    // the way and end pierced.
+    compareFrictionGuard<drape::Capsule>([](const Eigen::Vector3d& origin) {
+      drape::Solid<drape::Capsule> rod;
+      rod.shape.radius = 0.003;
+      rod.shape.halfHeight = 0.4;
+      rod.pose.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(0.5 * M_PI, Eigen::Vector3d::UnitX()));
+      rod.pose.position = origin + Eigen::Vector3d(0.01, 0.0, -0.001);
+      rod.staticFriction = 0.5;
+      return rod;
+    }, 0.03);
+  }
+  SECTION("a meshed 2 cm slab, turned about the vertical, its top 1 mm above the cloth, slid 4 cm across") {
+    compareFrictionGuard<drape::MeshShape>([](const Eigen::Vector3d& origin) {
+      drape::Solid<drape::MeshShape> s;
+      s.shape.grid = drape::buildDistanceGrid(drape::makeBoxMesh(Eigen::Vector3d(0.08, 0.06, 0.01)), {24});
+      s.pose.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()));
+      s.pose.position = origin + Eigen::Vector3d(0.004, 0.0, -0.009);
+      s.staticFriction = 0.5;
+      return s;
+    }, 0.04);
   }
 }
 

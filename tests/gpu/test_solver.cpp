@@ -416,11 +416,11 @@ TEST_CASE("continuous contact on the GPU: thin rods stop the cloth as on the CPU
   rod.shape.radius = 0.003;
   rod.pose.rotation = Eigen::AngleAxisd(0.5 * EIGEN_PI, Eigen::Vector3d::UnitX());  // along y
   rod.staticFriction = rod.dynamicFriction = 0.5;
-  auto run = [&](int n, double z, int substeps, int frames, bool continuous) {
+  auto run = [&](int n, double z, int substeps, int frames, bool continuous, double shift = 0) {
     drape::SheetDesc g;
     g.nx = g.ny = n;
     g.spacing = 0.02;
-    g.placement.position = {0, 0, z};
+    g.placement.position = {shift, 0, z};
     const auto asset = std::make_shared<const drape::ClothAsset<float>>(drape::ClothAsset<float>::sheet(g));
     drape::Settings settings;
     settings.subStepCount = substeps;
@@ -446,6 +446,18 @@ TEST_CASE("continuous contact on the GPU: thin rods stop the cloth as on the CPU
     CHECK(on > -0.3);
     CHECK(depth == 0);
     CHECK(off < -1);
+  }
+  SECTION("the same drop from starts moved 1 and 3 mm across the rod") {
+    // From these starts, before the friction guard (docs/design.md §18), friction carried a face across the rod.
+    rod.shape.halfHeight = 0.5;
+    for (const double shift : {0.001, 0.003}) {
+      const auto [on, depth, end] = run(40, 0.1, 2, 60, true, shift);
+      std::printf("[gpu continuous] rod drop, start moved %.0f mm: lowest mean height %.4g m, deepest point in the "
+                  "rod %.3g m\n",
+                  shift * 1e3, on, depth);
+      CHECK(on > -0.3);
+      CHECK(depth == 0);
+    }
   }
   SECTION("a kinematic 3 mm rod rising at 10 m/s into the cloth") {
     rod.shape.halfHeight = 0.3;

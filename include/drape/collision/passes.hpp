@@ -102,6 +102,8 @@ template <Scalar S> class ContactPasses {
   ContactBuffer<S>& contacts() { return contacts_; }
   const CollisionStats& stats() const { return stats_; }
   void resetStats() { stats_ = {}; }
+  /// The friction guard's count (the solver runs it after the response, in a single thread).
+  void addFrictionGuarded(std::int64_t faces) { stats_.frictionGuarded += faces; }
 
  private:
   /// Projects every vertex, then (when kFaces and the field is not linear) every face, out of each solid in

@@ -229,6 +229,7 @@ struct CollisionStats {
   std::int64_t vertexSweeps = 0;  ///< vertex paths searched by continuous contact
   std::int64_t faceSweeps = 0;    ///< face paths searched by continuous contact
   std::int64_t sweepContacts = 0;  ///< of those paths, the ones that came within the thickness on the way
+  std::int64_t frictionGuarded = 0;  ///< faces whose corners the friction guard put back (guardFriction)
 };
 
 /// What continuous contact reads (docs/design.md §18): where each vertex started the substep, the substep, and

@@ -8,6 +8,11 @@
 #include <drape/detail/parallel.hpp>
 #include <drape/kernel_constants.hpp>
 
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <vector>
+
 namespace drape {
 
 /// How far a path first came within the thickness: the point, the field's value and outward gradient there.
@@ -82,6 +87,45 @@ DRAPE_NOINLINE bool sweepFace(const Field& sdf, const Vec3<S> (&a)[3], const Vec
     if (!(t < S(1))) break;
   }
   return false;
+}
+
+/// The friction guard (docs/design.md §18). Position friction moved contact vertices from `before` to `x`, each
+/// along its own contact plane; on a solid thinner than a face that can carry a face across it. Every face with a
+/// corner it moved further than `reach`, and whose path from `before` to `x` came within `reach` of the solid
+/// after its start (sweepFace), and which the solid then pierces where friction left it, marks its three corners. A
+/// face whose corners all moved less cannot have crossed a solid it started at least `reach` from. Marks only, on
+/// positions nothing changes meanwhile: the result does not depend on the order of the faces. `boxLow`, `boxHigh`:
+/// the solid's box; a path whose box misses it grown by `reach` is passed over. Returns how many faces marked.
+template <Scalar S, class Field>
+Index markFrictionCrossings(const Field& sdf, const Vec3<S>& boxLow, const Vec3<S>& boxHigh,
+                            const std::vector<std::array<Index, 3>>& triangles, const Vec3<S>* before,
+                            const Vec3<S>* x, S reach, int maxIterations, bool exactSearch, std::uint8_t* marks) {
+  const Vec3<S> low = boxLow.array() - reach, high = boxHigh.array() + reach;
+  Index marked = 0;
+  for (const auto& t : triangles) {
+    const Vec3<S> a[3] = {before[t[0]], before[t[1]], before[t[2]]};
+    const Vec3<S> b[3] = {x[t[0]], x[t[1]], x[t[2]]};
+    if (!(std::max({(b[0] - a[0]).squaredNorm(), (b[1] - a[1]).squaredNorm(), (b[2] - a[2]).squaredNorm()}) >
+          reach * reach))
+      continue;
+    const Vec3<S> pathLow = a[0].cwiseMin(a[1]).cwiseMin(a[2]).cwiseMin(b[0]).cwiseMin(b[1]).cwiseMin(b[2]);
+    const Vec3<S> pathHigh = a[0].cwiseMax(a[1]).cwiseMax(a[2]).cwiseMax(b[0]).cwiseMax(b[1]).cwiseMax(b[2]);
+    if (!((pathHigh.array() >= low.array()).all() && (pathLow.array() <= high.array()).all())) continue;
+    FaceQuery<S> hit;
+    int evaluations = 0;
+    S when = 0;
+    // A face already within reach where friction found it is the contact passes' to judge: only a path that
+    // comes close on the way is friction's doing. And only a face the solid ends up piercing goes back: one
+    // friction merely carried near the solid is the next substep's contact to answer, and putting its corners
+    // back while their neighbours stay strains the cloth (a cloth thrown at a ball, docs/design.md §18).
+    if (!(sweepFace(sdf, a, b, reach, maxIterations, exactSearch, hit, evaluations, when) && when > S(0))) continue;
+    FaceQuery<S> end;
+    if (queryFace<true>(sdf, b[0], b[1], b[2], reach, maxIterations, end, exactSearch) && end.phi < S(0)) {
+      marks[t[0]] = marks[t[1]] = marks[t[2]] = 1;
+      ++marked;
+    }
+  }
+  return marked;
 }
 
 }  // namespace drape

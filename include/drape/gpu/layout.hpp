@@ -45,6 +45,9 @@ enum Binding : unsigned {
   kBodies = 21,           ///< Body per coupled body
   kBodySums = 22,         ///< BodySum per coupled body: the pushes summed by kind
   kShares = 23,           ///< float per coupled body: the share of its exchange both sides take
+  // Continuous contact's friction guard (only with continuous contact, friction and faces):
+  kGuardFrom = 24,        ///< vec4 per vertex: the position the contact passes left, before friction
+  kGuardMarks = 25,       ///< uint per vertex: 1 where a face the guard caught goes back to kGuardFrom
 };
 
 /// Uniform locations (set per dispatch with glProgramUniform*).
@@ -251,6 +254,8 @@ inline std::string preamble(const std::string& defines = {}) {
   s += define("DRAPE_PUSH_PINCH", kPinch);
   s += define("DRAPE_B_SHAPE_DATA", kShapeData);
   s += define("DRAPE_B_FLAGS", kFlags);
+  s += define("DRAPE_B_GUARD_FROM", kGuardFrom);
+  s += define("DRAPE_B_GUARD_MARKS", kGuardMarks);
   s += define("DRAPE_U_SLACK", kSlack);
   s += define("DRAPE_U_PASS", kPass);
   s += define("DRAPE_U_FRESH", kFresh);
@@ -303,6 +308,7 @@ inline std::string preamble(const std::string& defines = {}) {
   s += "#ifndef DRAPE_SHAPE\n#define DRAPE_SHAPE DRAPE_SHAPE_PLANE\n#endif\n";
   s += "#ifndef DRAPE_FRICTION\n#define DRAPE_FRICTION 1\n#endif\n";
   s += "#ifndef DRAPE_BODY\n#define DRAPE_BODY 0\n#endif\n";
+  s += "#ifndef DRAPE_GUARD\n#define DRAPE_GUARD 0\n#endif\n";
   s += "struct Constraint { uint a; uint b; float rest; uint pad; };\n";
   s += "struct Contact { vec4 normal[DRAPE_CONTACT_SLOTS]; vec4 velocity[DRAPE_CONTACT_SLOTS]; "
        "vec4 friction[DRAPE_CONTACT_SLOTS]; ivec4 body; uvec4 slots; vec4 normalDv; };\n";

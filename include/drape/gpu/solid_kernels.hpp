@@ -141,6 +141,28 @@ class SolidKernels {
     }
   }
 
+  /// Continuous contact's friction guard against one curved solid (markFrictionCrossings): each of the `faceCount`
+  /// faces whose path from the positions before friction came within `reach` of the solid marks its corners. The
+  /// kernel is compiled on a guarded scene's first substep, before anything moves.
+  template <class Shape> void compileGuardFor(const CompiledSolid<Shape, float>&) {
+    ShapeKernels& k = kernels_[shapeCode<Shape>()];
+    if constexpr (!Sdf<Shape, float>::kLinear)
+      if (!k.guardReady) {
+        k.guard = Program("collide_faces", shaders::collide_faces, shapeDefine<Shape>() + "#define DRAPE_GUARD 1\n");
+        k.guardReady = true;
+      }
+  }
+  /// Whether the solid's shape has the guard's kernel (compileGuardFor).
+  bool guards(const SolidPass& p) const { return kernels_[p.code].guardReady; }
+  void guardPass(const SolidPass& p, float reach, int pgdIterations, std::size_t faceCount) const {
+    const Program& k = kernels_[p.code].guard;
+    setUniforms(k, p, reach);
+    glProgramUniform1i(k.id(), layout::kPgdIterations, pgdIterations);
+    k.set(layout::kFirst, 0u);
+    k.set(layout::kCount, unsigned(faceCount));
+    k.dispatch(faceCount);
+  }
+
   /// One solid's repulsion region over `vertexCount` vertices; a coupled body's kernel also writes each vertex's
   /// push on the body (h the substep, `normalOnly` as Settings::normalForceOnly).
   void repel(const SolidPass& p, float thickness, unsigned vertexCount, float h, bool normalOnly) const {
@@ -160,7 +182,8 @@ class SolidKernels {
   struct ShapeKernels {  ///< the collision kernels compiled for one shape type (compileFor)
     Program vertices, faces, repel;
     Program verticesBody, facesBody, repelBody;  ///< for a coupled body's solid: its lines and pushes kept too
-    bool ready = false, bodyReady = false;
+    Program guard;                               ///< the friction guard (compileGuardFor)
+    bool ready = false, bodyReady = false, guardReady = false;
   };
   std::array<ShapeKernels, 8> kernels_;  ///< by layout::ShapeCode
   struct ShapeData {

@@ -103,7 +103,8 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
         translate_("translate", shaders::translate),
         pinKernel_("pins", shaders::pins),
         settle_("settle", shaders::settle),
-        frictionKernel_("friction", shaders::friction) {
+        frictionKernel_("friction", shaders::friction),
+        restore_("restore_marked", shaders::restore_marked) {
     // The three sets, colour by colour, in one buffer: set s's colour c starts at offset_[s] + colourOffsets[c].
     std::vector<layout::Constraint> constraints;
     const DistanceSet<float>* sets[3] = {&asset_->stretch, &asset_->shear, &asset_->bending};
@@ -226,13 +227,22 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
   /// kinematic (prepareSolids) and its field packed for the kernels (packShape).
   void prepareSolids(double hd) {
     passes_.clear();
-    const SolidFeatures has =
-        Front::prepareSolids(hd, [&](const auto& compiled, const auto&) { passes_.push_back(kernels_.pass(compiled)); });
+    const bool mayGuard = settings_.continuousContact && settings_.collisionMethod == CollisionMethod::Faces;
+    const SolidFeatures has = Front::prepareSolids(hd, [&](const auto& compiled, const auto&) {
+      passes_.push_back(kernels_.pass(compiled));
+      if (mayGuard && compiled.bounded) kernels_.compileGuardFor(compiled);
+    });
     friction_ = has.friction;
     repulsive_ = has.repulsion;
     reconcile_ = has.reconcile;
     coupled_ = has.coupled;
     sweep_ = settings_.continuousContact && settings_.collisionMethod != CollisionMethod::InSolve && has.bounded > 0;
+    // Position friction must not carry a face across a solid: continuous contact with faces guards it.
+    guard_ = sweep_ && friction_ && settings_.collisionMethod == CollisionMethod::Faces;
+    if (guard_ && guardMarks_.size() != state_.x.size()) {
+      guardFrom_.assign(std::vector<layout::Vertex>(state_.x.size()));
+      guardMarks_.assign(std::vector<std::uint32_t>(state_.x.size(), 0u));
+    }
     if (coupled_) coupling_.reserve(state_.x.size(), bodies_.size());  // the coupling's buffers, once it has a body
   }
 
@@ -424,12 +434,14 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
   /// The velocity split, then propagation (collide's second half).
   void respondAndPropagate(float h) {
     const auto n = unsigned(vertexCount());
+    if (guard_) copyVertices(positions_, guardFrom_);
     const Program& respond = friction_ ? respondFriction_ : respond_;
     respond.set(layout::kCount, n);
     respond.set(layout::kStep, h);
     respond.set(layout::kInverseStep, 1.0f / h);
     respond.set(layout::kNormalDamping, float(settings_.normalDamping));
     respond.dispatch(n);
+    if (guard_) guardFriction();
     if (settings_.collisionMethod != CollisionMethod::Faces || settings_.propagationRings <= 0 ||
         !(settings_.propagationWeight > 0))
       return;
@@ -441,6 +453,26 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
       propagate_.set(layout::kRing, unsigned(ring));
       propagate_.dispatch(n);
     }
+  }
+
+  /// Continuous contact's friction guard (BasicSolver::guardFriction): against every bounded curved solid, the
+  /// faces that position friction carried within kFrictionGuard of the thickness of it mark their
+  /// corners (collide_faces.comp with DRAPE_GUARD), which go back (restore_marked.comp).
+  void guardFriction() {
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+    guardFrom_.bind(layout::kGuardFrom);
+    guardMarks_.bind(layout::kGuardMarks);
+    faces_.bind(layout::kFaces);
+    const float reach = float(constants::kFrictionGuard * settings_.thickness);
+    bool any = false;
+    for (const SolidPass& p : passes_) {
+      if (!p.curved || !kernels_.guards(p)) continue;
+      kernels_.guardPass(p, reach, settings_.pgdIterations, faces_.size());
+      any = true;
+    }
+    if (!any) return;
+    restore_.set(layout::kCount, unsigned(vertexCount()));
+    restore_.dispatch(std::size_t(vertexCount()));
   }
 
   /// The CPU copy of the state into the GPU's buffers.
@@ -478,9 +510,12 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
   Buffer<std::uint32_t> flags_;   ///< per settle pass: whether its vertex passes found a contact
   bool coupled_ = false;          ///< some solid is a dynamic body this substep
   bool sweep_ = false;            ///< continuous contact this substep (the setting, and a bounded solid)
+  bool guard_ = false;            ///< and friction's moves are guarded (guardFriction)
+  Buffer<layout::Vertex> guardFrom_;  ///< the positions the contact passes left, for the guard
+  Buffer<std::uint32_t> guardMarks_;  ///< the guard's marks, cleared as they are undone
   BodyCoupling coupling_;  ///< the coupling's kernels, and its buffers once a scene has a dynamic solid
   Program predict_, solve_, update_, respond_, respondFriction_, propagate_, centre_, translate_, pinKernel_, settle_,
-      frictionKernel_;
+      frictionKernel_, restore_;
   Buffer<layout::PinSlot> pinSlots_;
   Buffer<float> pinLambdas_;
   Buffer<std::array<std::uint32_t, 4>> faces_;  ///< the faces, colour by colour (colourFaces)
