@@ -100,15 +100,19 @@ TEMPLATE_TEST_CASE("position friction carries no face across a 3 mm rod (the fri
   // plane, which on a rod thinner than a face is no guide, carried a face across it: without the guard the rod
   // ended 3.0 mm (the axis) and 0.3 mm inside a face, in float and in double (docs/design.md §18).
   using S = TestType;
+  std::int64_t guarded = 0;
   for (const double shift : {-0.004, -0.007}) {
     const RodDrop on = dropOnRod<S>(true, drape::CollisionMethod::Faces, shift);
     std::printf("[continuous] 3 mm rod, start moved %.0f mm, %s: deepest point in the rod %.3g m, %lld faces put "
                 "back by the friction guard, lowest mean height %.4g m\n",
                 shift * 1e3, stability::name<S>(), on.depth, static_cast<long long>(on.guarded), on.lowestMean);
     CHECK(on.depth == 0);
-    CHECK(on.guarded > 0);  // the guard acted: these starts are the ones it is for
     CHECK(on.lowestMean > -0.3);
+    guarded += on.guarded;
   }
+  // The guard acted. Which start needs it follows the landing's chaotic fold, which the build's arithmetic moves:
+  // under the sanitizers the -7 mm start came through without it.
+  CHECK(guarded > 0);
 }
 
 TEMPLATE_TEST_CASE("a kinematic 3 mm rod at 10 m/s catches a cloth it rises into", "[continuous]", float, double) {
