@@ -602,8 +602,8 @@ float featureAlignedPush(vec3 x0, vec3 x1, vec3 x2, float depth, vec3 qb, vec3 q
 // Continuous contact's friction guard (markFrictionCrossings in include/drape/collision/sweep.hpp), over every face
 // in any order: a face with a corner position friction moved further than the thickness uniform (the guard's
 // reach), whose path from before friction came within the reach of the solid after its start, and which the solid
-// then pierces where friction left it, marks its corners. Every mark is the
-// same 1, so faces that share a corner need no order; restore_marked puts the marked corners back.
+// then pierces where friction left it, marks its corners. Every mark is the same 1, so faces that share a corner
+// need no order; restore_marked puts the marked corners back.
 layout(std430, binding = DRAPE_B_GUARD_FROM) readonly buffer GuardFrom { vec4 before[]; };
 layout(std430, binding = DRAPE_B_GUARD_MARKS) buffer GuardMarks { uint marks[]; };
 

@@ -474,8 +474,9 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
   }
 
   /// Continuous contact's friction guard (markFrictionCrossings, docs/design.md §18): against every bounded
-  /// curved solid, the faces that position friction carried within kFrictionGuard of the thickness of it mark
-  /// their corners, which go back to where the contact passes left them. Their velocities keep the response's.
+  /// curved solid, the faces that position friction carried within kFrictionGuard of the thickness of it, and that
+  /// it then pierces, mark their corners, which go back to where the contact passes left them. Their velocities
+  /// keep the response's.
   void guardFriction() {
     DRAPE_OMP(single)
     guardFrictionAlone();

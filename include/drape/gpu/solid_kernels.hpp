@@ -142,8 +142,8 @@ class SolidKernels {
   }
 
   /// Continuous contact's friction guard against one curved solid (markFrictionCrossings): each of the `faceCount`
-  /// faces whose path from the positions before friction came within `reach` of the solid marks its corners. The
-  /// kernel is compiled on a guarded scene's first substep, before anything moves.
+  /// faces that friction carried within `reach` of the solid on the way, and that the solid then pierces, marks
+  /// its corners. The kernel is compiled on a guarded scene's first substep, before anything moves.
   template <class Shape> void compileGuardFor(const CompiledSolid<Shape, float>&) {
     ShapeKernels& k = kernels_[shapeCode<Shape>()];
     if constexpr (!Sdf<Shape, float>::kLinear)

@@ -456,8 +456,8 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
   }
 
   /// Continuous contact's friction guard (BasicSolver::guardFriction): against every bounded curved solid, the
-  /// faces that position friction carried within kFrictionGuard of the thickness of it mark their
-  /// corners (collide_faces.comp with DRAPE_GUARD), which go back (restore_marked.comp).
+  /// faces that position friction carried within kFrictionGuard of the thickness of it, and that it then pierces,
+  /// mark their corners (collide_faces.comp with DRAPE_GUARD), which go back (restore_marked.comp).
   void guardFriction() {
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
     guardFrom_.bind(layout::kGuardFrom);
