@@ -9,6 +9,7 @@
 
 #include <drape/drape.hpp>
 #include <drape/coupling/rigid_world.hpp>
+#include <drape/detail/triangle.hpp>
 #include <drape/sdf/convex.hpp>  // the bodies' own distance fields (bodyPenetrationAtBodies)
 
 #include <algorithm>
@@ -16,9 +17,11 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <map>
 #include <memory>
 #include <numbers>
 #include <random>
+#include <set>
 #include <string>
 #include <type_traits>
 #include <variant>
@@ -270,6 +273,154 @@ template <Scalar S, class ClothSolver = Solver<S>> class RigidRain {
   std::vector<RainShape> kinds_;
   double time_ = 0;
   bool released_ = false;
+};
+
+/// Counts bodies passing through the cloth's sheet. Each observation finds, for every body, the point of the sheet
+/// nearest its centre and the side of the sheet the centre is on: along the normal of the face there, or, where
+/// the nearest point is on an edge or a corner shared by several faces, along the angle-weighted normal of those
+/// faces (Bærentzen and Aanæs, "Signed distance computation using the angle weighted pseudonormal", 2005), which
+/// gives the right side at a crease. A body is through when that side flips between two observations in a row,
+/// both of them near the sheet (the centre within the body's bounding radius plus `margin` of it). A centre
+/// whose nearest point is on the sheet's boundary has no side: a body that fell past the cloth's edge and that
+/// the edge then swung over has gone around the sheet, not through it. Observe once a step: a body moving less
+/// than `margin` plus its radius in a step cannot cross unseen.
+class SheetCrossings {
+ public:
+  template <Scalar S> explicit SheetCrossings(const ClothAsset<S>& asset, double margin = 0.05)
+      : triangles_(asset.triangles), margin_(margin), vertexFaces_(std::size_t(asset.vertexCount())) {
+    std::map<std::pair<Index, Index>, int> edgeUses;
+    for (std::size_t f = 0; f < triangles_.size(); ++f)
+      for (int k = 0; k < 3; ++k) {
+        const Index a = triangles_[f][std::size_t(k)], b = triangles_[f][std::size_t((k + 1) % 3)];
+        ++edgeUses[{std::min(a, b), std::max(a, b)}];
+        vertexFaces_[std::size_t(a)].push_back(Index(f));
+      }
+    boundaryVertex_.assign(std::size_t(asset.vertexCount()), false);
+    for (const auto& [edge, uses] : edgeUses)
+      if (uses == 1) {
+        boundaryEdges_.insert(edge);
+        boundaryVertex_[std::size_t(edge.first)] = boundaryVertex_[std::size_t(edge.second)] = true;
+      }
+  }
+
+  /// Reads every body's side of the sheet and counts the flips since the last observation.
+  template <class ClothSolver> void observe(const ClothSolver& cloth, const RigidWorld& world) {
+    const Index n = cloth.vertexCount();
+    x_.resize(std::size_t(n));
+    for (Index i = 0; i < n; ++i) x_[std::size_t(i)] = cloth.position(i);
+    longestEdge_ = 0;
+    for (const auto& t : triangles_)
+      for (int k = 0; k < 3; ++k)
+        longestEdge_ = std::max(longestEdge_, (at(t[std::size_t(k)]) - at(t[std::size_t((k + 1) % 3)])).norm());
+    side_.resize(std::size_t(world.bodyCount()), 0);
+    through_.resize(std::size_t(world.bodyCount()), false);
+    for (int b = 0; b < world.bodyCount(); ++b) {
+      const int now = sideOf(world.body(b).pose().position, world.body(b).boundingRadius());
+      int& before = side_[std::size_t(b)];
+      if (now == kOnSheet) continue;  // the last side stands
+      if (now != 0 && before != 0 && now != before) {
+        ++crossings_;
+        through_[std::size_t(b)] = true;
+      }
+      before = now;
+    }
+  }
+
+  int crossings() const { return crossings_; }  ///< flips counted so far
+  /// Bodies that have passed through the sheet at least once.
+  int bodiesThrough() const { return int(std::count(through_.begin(), through_.end(), true)); }
+
+ private:
+  const Eigen::Vector3d& at(Index i) const { return x_[std::size_t(i)]; }
+  Eigen::Vector3d faceNormal(Index f) const {
+    const auto& t = triangles_[std::size_t(f)];
+    return (at(t[1]) - at(t[0])).cross(at(t[2]) - at(t[0])).normalized();
+  }
+  static constexpr int kOnSheet = 2;
+  /// +1 or -1 for the side of the sheet `c` is on, 0 where it has none (far from the sheet, or nearest its
+  /// boundary), kOnSheet on it.
+  int sideOf(const Eigen::Vector3d& c, double radius) const {
+    using detail::TriangleFeature;
+    double nearestVertex = 1e300;
+    for (const auto& p : x_) nearestVertex = std::min(nearestVertex, (p - c).squaredNorm());
+    nearestVertex = std::sqrt(nearestVertex);
+    if (nearestVertex > radius + margin_ + longestEdge_) return 0;
+    // The nearest point of the sheet is no further than the nearest vertex, so a face holding it has every
+    // corner within that distance plus the face's longest edge.
+    const double reach = nearestVertex + longestEdge_;
+    double best = 1e300;
+    Index bestFace = -1;
+    detail::TriangleRegion<double> bestRegion{TriangleFeature::Face};
+    for (std::size_t f = 0; f < triangles_.size(); ++f) {
+      const auto& t = triangles_[f];
+      if ((at(t[0]) - c).norm() > reach) continue;
+      const auto region = detail::nearestRegion<double>(c, at(t[0]), at(t[1]), at(t[2]));
+      const Eigen::Vector3d p = pointOf(t, region);
+      const double d = (p - c).squaredNorm();
+      if (d < best) best = d, bestFace = Index(f), bestRegion = region;
+    }
+    if (bestFace < 0 || std::sqrt(best) > radius + margin_) return 0;
+    const auto& t = triangles_[std::size_t(bestFace)];
+    const Eigen::Vector3d p = pointOf(t, bestRegion);
+    Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+    auto vertexNormal = [&](Index v) {  // angle-weighted, or none on the boundary
+      if (boundaryVertex_[std::size_t(v)]) return Eigen::Vector3d::Zero().eval();
+      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+      for (Index f : vertexFaces_[std::size_t(v)]) {
+        const auto& u = triangles_[std::size_t(f)];
+        const int k = u[0] == v ? 0 : (u[1] == v ? 1 : 2);
+        const Eigen::Vector3d e1 = at(u[std::size_t((k + 1) % 3)]) - at(v), e2 = at(u[std::size_t((k + 2) % 3)]) - at(v);
+        sum += std::acos(std::clamp(e1.normalized().dot(e2.normalized()), -1.0, 1.0)) * faceNormal(f);
+      }
+      return sum;
+    };
+    auto edgeNormal = [&](Index a, Index b) {  // the two faces' normals, or none on the boundary
+      if (boundaryEdges_.count({std::min(a, b), std::max(a, b)})) return Eigen::Vector3d::Zero().eval();
+      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+      for (Index f : vertexFaces_[std::size_t(a)]) {
+        const auto& u = triangles_[std::size_t(f)];
+        if (u[0] == b || u[1] == b || u[2] == b) sum += faceNormal(f);
+      }
+      return sum;
+    };
+    switch (bestRegion.feature) {
+      case TriangleFeature::VertexA: normal = vertexNormal(t[0]); break;
+      case TriangleFeature::VertexB: normal = vertexNormal(t[1]); break;
+      case TriangleFeature::VertexC: normal = vertexNormal(t[2]); break;
+      case TriangleFeature::EdgeAB: normal = edgeNormal(t[0], t[1]); break;
+      case TriangleFeature::EdgeBC: normal = edgeNormal(t[1], t[2]); break;
+      case TriangleFeature::EdgeCA: normal = edgeNormal(t[2], t[0]); break;
+      case TriangleFeature::Face: normal = faceNormal(bestFace); break;
+    }
+    if (normal.squaredNorm() == 0) return 0;  // the boundary's: no side
+    const double s = normal.dot(c - p);
+    return s > 0 ? 1 : (s < 0 ? -1 : kOnSheet);
+  }
+  Eigen::Vector3d pointOf(const std::array<Index, 3>& t, const detail::TriangleRegion<double>& r) const {
+    using detail::TriangleFeature;
+    const Eigen::Vector3d &a = at(t[0]), &b = at(t[1]), &c = at(t[2]);
+    switch (r.feature) {
+      case TriangleFeature::VertexA: return a;
+      case TriangleFeature::VertexB: return b;
+      case TriangleFeature::VertexC: return c;
+      case TriangleFeature::EdgeAB: return a + r.s * (b - a);
+      case TriangleFeature::EdgeBC: return b + r.s * (c - b);
+      case TriangleFeature::EdgeCA: return a + r.s * (c - a);
+      case TriangleFeature::Face: break;
+    }
+    return a + r.s * (b - a) + r.t * (c - a);
+  }
+
+  std::vector<std::array<Index, 3>> triangles_;
+  double margin_;
+  std::vector<std::vector<Index>> vertexFaces_;
+  std::set<std::pair<Index, Index>> boundaryEdges_;
+  std::vector<bool> boundaryVertex_;
+  std::vector<Eigen::Vector3d> x_;
+  double longestEdge_ = 0;
+  std::vector<int> side_;
+  std::vector<bool> through_;
+  int crossings_ = 0;
 };
 
 /// Deepest cloth vertex inside any coupled body (m, 0 if none), with the distance fields the cloth solved

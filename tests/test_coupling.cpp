@@ -5,6 +5,7 @@
 #include <drape/coupling/rigid_world.hpp>
 
 #include "coupling_helpers.hpp"
+#include "rigid_rain.hpp"
 
 #include <catch2/catch.hpp>
 
@@ -504,4 +505,90 @@ TEMPLATE_TEST_CASE("a step that fails midway leaves the cloth, its solids and th
     reference.step(1.0 / 60);
     CHECK(sameState(cloth, reference));
   }
+}
+
+namespace {
+
+/// A cloth for SheetCrossings to read: positions only.
+struct SheetPositions {
+  std::vector<Eigen::Vector3d> x;
+  drape::Index vertexCount() const { return drape::Index(x.size()); }
+  Eigen::Vector3d position(drape::Index i) const { return x[std::size_t(i)]; }
+};
+
+}  // namespace
+
+TEST_CASE("the sheet-crossing meter counts a body through the cloth, and not one that went around its edge",
+          "[coupling][meter]") {
+  // An 11x11 sheet of 2 cm in z = 0 and one ball of radius 3 cm, moved 1 cm per observation.
+  drape::SheetDesc d;
+  d.nx = d.ny = 11;
+  const auto asset = drape::ClothAsset<double>::sheet(d);
+  SheetPositions sheet;
+  for (const auto& p : asset.restPositions) sheet.x.push_back(asset.origin + p);
+  drape::RigidWorld world;
+  drape::BodyDesc ball;
+  ball.shape = drape::Sphere{0.03};
+  world.add(ball);
+  auto walk = [&](drape::scenes::SheetCrossings& meter, const Eigen::Vector3d& from, const Eigen::Vector3d& to) {
+    const int n = int(std::ceil((to - from).norm() / 0.01));
+    for (int k = 0; k <= n; ++k) {
+      world.body(0).state.pose.position = from + (to - from) * (double(k) / n);
+      meter.observe(sheet, world);
+    }
+  };
+  SECTION("straight down through the middle and back up: two crossings by one body") {
+    drape::scenes::SheetCrossings meter(asset);
+    walk(meter, {0.013, 0.007, 0.2}, {0.013, 0.007, -0.2});
+    CHECK(meter.crossings() == 1);
+    walk(meter, {0.013, 0.007, -0.2}, {0.013, 0.007, 0.2});
+    CHECK(meter.crossings() == 2);
+    CHECK(meter.bodiesThrough() == 1);
+  }
+  SECTION("down through a vertex and through an edge of a creased sheet") {
+    // Folded 90 degrees along x = 0 into a roof: the nearest point of a ball over the ridge is on the crease.
+    for (auto& p : sheet.x) p.z() = -std::abs(p.x());
+    drape::scenes::SheetCrossings meter(asset);
+    walk(meter, {0, 0, 0.2}, {0, 0, -0.2});  // x = 0, y = 0 is a vertex of the crease
+    walk(meter, {0, 0.01, -0.2}, {0, 0.01, 0.2});  // between two vertices of the crease: an edge
+    CHECK(meter.crossings() == 2);
+    // Along over the roof, from one side to the other, never through it.
+    walk(meter, {-0.09, 0.0, 0.05}, {0.09, 0.0, 0.05});
+    CHECK(meter.crossings() == 2);
+  }
+  SECTION("around the edge, from above to below: none") {
+    drape::scenes::SheetCrossings meter(asset);
+    walk(meter, {0, 0, 0.05}, {0.15, 0, 0.05});
+    walk(meter, {0.15, 0, 0.05}, {0.15, 0, -0.05});
+    walk(meter, {0.15, 0, -0.05}, {0, 0, -0.05});
+    CHECK(meter.crossings() == 0);
+    CHECK(meter.bodiesThrough() == 0);
+  }
+  SECTION("the sheet swung over a ball that lay beside it: none") {
+    drape::scenes::SheetCrossings meter(asset);
+    world.body(0).state.pose.position = {0.16, 0, -0.04};
+    const std::vector<Eigen::Vector3d> flat = sheet.x;
+    for (int k = 0; k <= 20; ++k) {  // slid 16 cm along x, over the ball
+      for (std::size_t i = 0; i < flat.size(); ++i) sheet.x[i] = flat[i] + Eigen::Vector3d(0.008 * k, 0, 0);
+      meter.observe(sheet, world);
+    }
+    CHECK(meter.crossings() == 0);
+  }
+}
+
+TEST_CASE("the sheet-crossing meter sees bodies pass through the rain's cloth at 2 substeps", "[coupling][meter]") {
+  // The rain's cloth lets bodies through at 2 substeps (docs/benchmarks.md, "The rain"): the meter must see them
+  // while the corners still hold it.
+  drape::scenes::RainConfig c;
+  c.bodies = 80;
+  c.subSteps = 2;
+  drape::scenes::RigidRain<float> scene(c);
+  drape::scenes::SheetCrossings meter(scene.cloth().asset());
+  meter.observe(scene.cloth(), scene.world());
+  while (!scene.released()) {
+    scene.step();
+    meter.observe(scene.cloth(), scene.world());
+  }
+  INFO("bodies through the cloth before the release: " << meter.bodiesThrough());
+  CHECK(meter.bodiesThrough() > 0);
 }

@@ -232,13 +232,15 @@ nlohmann::ordered_json run(const Options& o, [[maybe_unused]] Painter* painter, 
   double maxPen = 0, maxPenPinned = 0, maxPenAtBodies = 0, maxFloorPen = 0, maxBodySpeed = 0, maxClothSpeed = 0,
          maxBodySpin = 0, maxBodySpinBound = 0, maxSpinRatio = 0;
   int maxPenStep = 0, maxBodySpeedStep = 0, maxBodySpinStep = 0;
-  int throughAtRelease = -1, offAtRelease = -1;
+  int underAtRelease = -1, offAtRelease = -1, throughAtRelease = -1;
   bool finite = true;
-  // Bodies that went through the cloth and bodies not over it, measured just before the release. A body is over
-  // the cloth where its centre lies inside the outline of the cloth's boundary vertices in x, y (even-odd rule),
-  // and through it where the centre is also below the cloth vertex nearest it in x, y. The outline, not the
-  // cloth's bounding rectangle: the pinned cloth's edges sag inward, and a body that fell past one lies inside
-  // the rectangle, below the edge.
+  // Bodies that passed through the cloth's sheet, watched step by step (SheetCrossings): before the release,
+  // while the pinned cloth holds them, and after it.
+  drape::scenes::SheetCrossings sheet(cloth.asset());
+  // Bodies under the cloth and bodies not over it, measured just before the release. A body is over the cloth
+  // where its centre lies inside the outline of the cloth's boundary vertices in x, y (even-odd rule), and under
+  // it where the centre is also below the cloth vertex nearest it in x, y: a body that fell past an edge the
+  // sagging cloth then swung over counts, so this is not a count of bodies through the cloth.
   std::vector<Index> outline;  // the sheet's boundary vertices in order around it
   {
     const Index nx = o.config.nx, ny = o.config.ny;
@@ -256,8 +258,8 @@ nlohmann::ordered_json run(const Options& o, [[maybe_unused]] Painter* painter, 
     }
     return inside;
   };
-  auto countThroughAndOff = [&] {
-    int through = 0, off = 0;
+  auto countUnderAndOff = [&] {
+    int under = 0, off = 0;
     for (int b = 0; b < bodies; ++b) {
       const Vector3d c = world.body(b).pose().position;
       if (!insideOutline(c)) {
@@ -270,15 +272,17 @@ nlohmann::ordered_json run(const Options& o, [[maybe_unused]] Painter* painter, 
         const double d = (p - c).head<2>().squaredNorm();
         if (d < best) best = d, z = p.z();
       }
-      if (c.z() < z) ++through;
+      if (c.z() < z) ++under;
     }
-    throughAtRelease = through, offAtRelease = off;
+    underAtRelease = under, offAtRelease = off, throughAtRelease = sheet.bodiesThrough();
   };
+  sheet.observe(cloth, world);
   for (int s = 1; s <= o.steps; ++s) {
-    if (!scene.released() && scene.time() >= o.config.release - 1e-9) countThroughAndOff();
+    if (!scene.released() && scene.time() >= o.config.release - 1e-9) countUnderAndOff();
     const auto t0 = Clock::now();
     scene.step();
     stepMs.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+    sheet.observe(cloth, world);
     const double pen = drape::scenes::bodyPenetration(cloth, largestRadius);
     if (pen > maxPen) maxPen = pen, maxPenStep = s;
     if (!scene.released()) maxPenPinned = std::max(maxPenPinned, pen);
@@ -377,10 +381,13 @@ nlohmann::ordered_json run(const Options& o, [[maybe_unused]] Painter* painter, 
   j["max_body_spin_energy_bound"] = maxBodySpinBound;  // that body's, rad/s
   j["max_body_spin_over_bound"] = maxSpinRatio;         // the largest of any body's spin over its own bound
   j["max_cloth_speed"] = maxClothSpeed;
-  if (throughAtRelease >= 0) {
-    j["bodies_through_cloth_at_release"] = throughAtRelease;
+  if (underAtRelease >= 0) {
+    j["bodies_through_cloth_at_release"] = throughAtRelease;  // passed through the sheet while it was pinned
+    j["bodies_under_cloth_at_release"] = underAtRelease;
     j["bodies_off_cloth_at_release"] = offAtRelease;
   }
+  j["bodies_through_cloth"] = sheet.bodiesThrough();  // the whole run
+  j["sheet_crossings"] = sheet.crossings();
   j["final_body_z_min"] = heights.empty() ? 0 : *std::min_element(heights.begin(), heights.end());
   j["final_body_z_median"] = median(heights);
   j["final_body_z_max"] = heights.empty() ? 0 : *std::max_element(heights.begin(), heights.end());
@@ -499,8 +506,11 @@ int main(int argc, char** argv) {
                  j["final_body_z_max"].get<double>(), j["final_lowest_body_point"].get<double>(),
                  j["final_max_strain"].get<double>());
     if (j.contains("bodies_through_cloth_at_release"))
-      std::fprintf(stderr, "  at the release: %d bodies through the cloth, %d off it\n",
-                   j["bodies_through_cloth_at_release"].get<int>(), j["bodies_off_cloth_at_release"].get<int>());
+      std::fprintf(stderr, "  at the release: %d bodies through the cloth, %d under it, %d off it\n",
+                   j["bodies_through_cloth_at_release"].get<int>(), j["bodies_under_cloth_at_release"].get<int>(),
+                   j["bodies_off_cloth_at_release"].get<int>());
+    std::fprintf(stderr, "  bodies through the cloth over the run: %d (%d crossings)\n",
+                 j["bodies_through_cloth"].get<int>(), j["sheet_crossings"].get<int>());
     return j["finite"].get<bool>() ? 0 : 3;
   } catch (const std::exception& e) {
     std::cerr << "rigid_rain: " << e.what() << '\n';
