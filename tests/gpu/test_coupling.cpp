@@ -255,9 +255,13 @@ TEST_CASE("the rigid rain on the GPU keeps the CPU's invariants over 2 s: no bod
     largestRadius = std::max(largestRadius, body.boundingRadius());
   }
   double cpuDepth = 0, gpuDepth = 0, cpuFastest = 0, gpuFastest = 0;
+  // Bodies that crossed the sheet, step by step (docs/design.md §10).
+  drape::scenes::SheetCrossings cpuSheet(cpu.cloth().asset()), gpuSheet(gpu.cloth().asset());
   auto stepBoth = [&] {
     cpu.step();
     gpu.step();
+    cpuSheet.observe(cpu.cloth(), cpu.world());
+    gpuSheet.observe(gpu.cloth(), gpu.world());
     cpuDepth = std::max(cpuDepth, drape::scenes::bodyPenetration(cpu.cloth(), largestRadius));
     gpuDepth = std::max(gpuDepth, drape::scenes::bodyPenetration(gpu.cloth(), largestRadius));
     for (int b = 0; b < gpu.world().bodyCount(); ++b) {
@@ -305,6 +309,8 @@ TEST_CASE("the rigid rain on the GPU keeps the CPU's invariants over 2 s: no bod
   CHECK(gpuOver == cpuOver);
   CHECK(gpuThrough == 0);
   CHECK(cpuThrough == 0);
+  CHECK(gpuSheet.crossings() == 0);
+  CHECK(cpuSheet.crossings() == 0);
 
   for (int s = 80; s < 200; ++s) stepBoth();  // on to 2 s
   const auto [cpuOver2, cpuThrough2] = overAndThrough(cpu);
@@ -318,6 +324,8 @@ TEST_CASE("the rigid rain on the GPU keeps the CPU's invariants over 2 s: no bod
   CHECK(gpuFastest <= bound);
   CHECK(gpuOver2 >= 1);
   CHECK(gpuThrough2 == 0);
+  CHECK(gpuSheet.crossings() == 0);
+  CHECK(cpuSheet.crossings() == 0);
   CHECK(cpuThrough2 == 0);
 }
 
