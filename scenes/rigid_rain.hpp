@@ -370,7 +370,8 @@ class SheetCrossings {
       for (Index f : vertexFaces_[std::size_t(v)]) {
         const auto& u = triangles_[std::size_t(f)];
         const int k = u[0] == v ? 0 : (u[1] == v ? 1 : 2);
-        const Eigen::Vector3d e1 = at(u[std::size_t((k + 1) % 3)]) - at(v), e2 = at(u[std::size_t((k + 2) % 3)]) - at(v);
+        const Eigen::Vector3d e1 = at(u[std::size_t((k + 1) % 3)]) - at(v);
+        const Eigen::Vector3d e2 = at(u[std::size_t((k + 2) % 3)]) - at(v);
         sum += std::acos(std::clamp(e1.normalized().dot(e2.normalized()), -1.0, 1.0)) * faceNormal(f);
       }
       return sum;
