@@ -9,7 +9,7 @@
 
 #include <drape/drape.hpp>
 #include <drape/coupling/rigid_world.hpp>
-#include <drape/detail/triangle.hpp>
+#include <drape/sdf/grid.hpp>  // detail::closestOnTriangle
 #include <drape/sdf/convex.hpp>  // the bodies' own distance fields (bodyPenetrationAtBodies)
 
 #include <algorithm>
@@ -351,18 +351,17 @@ class SheetCrossings {
     const double reach = nearestVertex + longestEdge_;
     double best = 1e300;
     Index bestFace = -1;
-    detail::TriangleRegion<double> bestRegion{TriangleFeature::Face};
+    detail::ClosestOnTriangle nearest;
     for (std::size_t f = 0; f < triangles_.size(); ++f) {
       const auto& t = triangles_[f];
       if ((at(t[0]) - c).norm() > reach) continue;
-      const auto region = detail::nearestRegion<double>(c, at(t[0]), at(t[1]), at(t[2]));
-      const Eigen::Vector3d p = pointOf(t, region);
-      const double d = (p - c).squaredNorm();
-      if (d < best) best = d, bestFace = Index(f), bestRegion = region;
+      const detail::ClosestOnTriangle q = detail::closestOnTriangle(c, at(t[0]), at(t[1]), at(t[2]));
+      const double d = (q.point - c).squaredNorm();
+      if (d < best) best = d, bestFace = Index(f), nearest = q;
     }
     if (bestFace < 0 || std::sqrt(best) > radius + margin_) return 0;
     const auto& t = triangles_[std::size_t(bestFace)];
-    const Eigen::Vector3d p = pointOf(t, bestRegion);
+    const Eigen::Vector3d& p = nearest.point;
     Eigen::Vector3d normal = Eigen::Vector3d::Zero();
     auto vertexNormal = [&](Index v) {  // angle-weighted, or none on the boundary
       if (boundaryVertex_[std::size_t(v)]) return Eigen::Vector3d::Zero().eval();
@@ -385,7 +384,7 @@ class SheetCrossings {
       }
       return sum;
     };
-    switch (bestRegion.feature) {
+    switch (nearest.feature) {
       case TriangleFeature::VertexA: normal = vertexNormal(t[0]); break;
       case TriangleFeature::VertexB: normal = vertexNormal(t[1]); break;
       case TriangleFeature::VertexC: normal = vertexNormal(t[2]); break;
@@ -398,21 +397,6 @@ class SheetCrossings {
     const double s = normal.dot(c - p);
     return s > 0 ? 1 : (s < 0 ? -1 : kOnSheet);
   }
-  Eigen::Vector3d pointOf(const std::array<Index, 3>& t, const detail::TriangleRegion<double>& r) const {
-    using detail::TriangleFeature;
-    const Eigen::Vector3d &a = at(t[0]), &b = at(t[1]), &c = at(t[2]);
-    switch (r.feature) {
-      case TriangleFeature::VertexA: return a;
-      case TriangleFeature::VertexB: return b;
-      case TriangleFeature::VertexC: return c;
-      case TriangleFeature::EdgeAB: return a + r.s * (b - a);
-      case TriangleFeature::EdgeBC: return b + r.s * (c - b);
-      case TriangleFeature::EdgeCA: return a + r.s * (c - a);
-      case TriangleFeature::Face: break;
-    }
-    return a + r.s * (b - a) + r.t * (c - a);
-  }
-
   std::vector<std::array<Index, 3>> triangles_;
   double margin_;
   std::vector<std::vector<Index>> vertexFaces_;
