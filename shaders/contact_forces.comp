@@ -1,5 +1,5 @@
-// docs/design.md §6, phase 2, per vertex (the CPU twin: gatherContactForces with pinchSupport, unresolvedOverlap,
-// contactPoint, addWrench, addExchange, ownShare, addSplitExchange and gatherPropagatedImpulse in
+// docs/design.md §6, phase 2, per vertex (the CPU twin: gatherContactForces with pinchSupport, pinchingSlot,
+// unresolvedOverlap, contactPoint, addWrench, addExchange, ownShare, addSplitExchange and gatherPropagatedImpulse in
 // include/drape/coupling/contact_forces.hpp): what each contact vertex passes to the coupled bodies it touches, by
 // the chosen estimator (sub-force, energy-based, impulse-based), reversed onto the body at the contact's line;
 // each entry is written to the vertex's own BodyPush slots (one per contact slot at most), so nothing is summed
@@ -8,9 +8,9 @@
 // A vertex whose slots all belong to one body passes that body its whole velocity change along the slot that
 // corrected it most (an exchange, which shareExchanges may scale); a vertex between two bodies, or a body and a
 // fixed solid, passes each body the part of its change that body's slot made (ownShare), as an exchange of that
-// part, unless it is pinched against a fixed solid facing the body, which then holds the body through it (a
-// pinch). With the impulse estimator and propagation, a vertex not in contact passes what propagation gave it to
-// the body of its first neighbour in contact with one.
+// part, unless it is pinched against a fixed solid or another body facing the body, which then holds the body
+// through it (a pinch). With the impulse estimator and propagation, a vertex not in contact passes what
+// propagation gave it to the body of its first neighbour in contact with one.
 layout(local_size_x = DRAPE_WORKGROUP) in;
 layout(std430, binding = DRAPE_B_POSITIONS) readonly buffer Positions { vec4 x[]; };
 layout(std430, binding = DRAPE_B_VELOCITIES) readonly buffer Velocities { vec4 v[]; };
@@ -98,24 +98,51 @@ float ownShare(uint i, int k, vec3 dv) {
   return max(determinant(g) / det, 0.0) / along;
 }
 
-// A vertex pinched between slot k's body and a fixed solid facing it: the solid holds the body through it
-// (pinchSupport). Returns false when the vertex is not pinched.
+// The slot of vertex i that pinches it against slot k's body: a fixed solid's facing it before another body's;
+// -1 where there is none (pinchingSlot).
+int pinchingSlot(uint i, int k) {
+  const Contact c = contacts[i];
+  const vec3 n = c.normal[k].xyz;
+  int fixedSlot = -1, bodySlot = -1;  // (`fixed` is reserved in GLSL)
+  for (int j = 0; j < int(c.slots.x); ++j) {
+    if (j == k || !(dot3(c.normal[j].xyz, n) < DRAPE_PINCH_OPPOSING_COS)) continue;
+    if (c.body[j] < 0) fixedSlot = j;
+    else if (c.body[j] != c.body[k]) bodySlot = j;
+  }
+  return fixedSlot >= 0 ? fixedSlot : bodySlot;
+}
+
+mat3 inverseInertiaOf(Body body) {
+  return transpose(mat3(body.inverseInertia[0].xyz, body.inverseInertia[1].xyz, body.inverseInertia[2].xyz));
+}
+
+// A vertex pinched between slot k's body and a surface facing it, a fixed solid or another body: the surface
+// holds the body through it, with the pair's effective mass against another body (pinchSupport). Returns false
+// when the vertex is not pinched.
 bool pinchSupport(uint i, int k) {
   const Contact c = contacts[i];
   const vec3 n = c.normal[k].xyz;
-  int against = -1;
-  for (int j = 0; j < int(c.slots.x); ++j)
-    if (j != k && c.body[j] < 0 && dot3(c.normal[j].xyz, n) < DRAPE_PINCH_OPPOSING_COS) against = j;
+  const int against = pinchingSlot(i, k);
   if (against < 0) return false;
   const Body body = bodies[c.body[k]];
   const vec3 r = contactPoint(i, k, body);
-  const vec3 wall = c.velocity[against].xyz;
+  const mat3 inverseInertia = inverseInertiaOf(body);
+  vec3 wall = c.velocity[against].xyz, ro = vec3(0.0);
+  float otherInverseMass = 0.0;
+  mat3 otherInverseInertia = mat3(0.0);
+  if (c.body[against] >= 0) {
+    const Body other = bodies[c.body[against]];
+    ro = contactPoint(i, against, other);
+    precise const vec3 otherAt = other.linear.xyz + crossOf(other.angular.xyz, ro);
+    wall = otherAt;
+    otherInverseMass = other.centre.w;
+    otherInverseInertia = inverseInertiaOf(other);
+  }
   precise const vec3 bodyAt = body.linear.xyz + crossOf(body.angular.xyz, r);
   precise const float approach = dot3(bodyAt - wall, n) + kPinchRate * unresolvedOverlap(i, k) / h;
-  const vec3 rn = crossOf(r, n);
-  const mat3 inverseInertia = transpose(mat3(body.inverseInertia[0].xyz, body.inverseInertia[1].xyz,
-                                             body.inverseInertia[2].xyz));
-  precise const float kn = body.centre.w + dot3(rn, inverseInertia * rn);
+  const vec3 rn = crossOf(r, n), on = crossOf(ro, n);
+  precise float kn = body.centre.w + dot3(rn, inverseInertia * rn);
+  if (c.body[against] >= 0) kn = kn + (otherInverseMass + dot3(on, otherInverseInertia * on));
   if (!(approach > 0.0) || !(kn > 0.0)) {
     entries[entryCount].force = vec4(0.0);
     entries[entryCount].torque = vec4(0.0);
@@ -131,8 +158,10 @@ bool pinchSupport(uint i, int k) {
   const float speed = length3(slide);
   if (speed > 0.0 && normalOnly == 0u) {
     slide = slide / speed;
-    const vec3 rt = crossOf(r, slide);
-    precise const float stop = speed / ((body.centre.w + dot3(rt, inverseInertia * rt)) * h);
+    const vec3 rt = crossOf(r, slide), ot = crossOf(ro, slide);
+    precise float kt = body.centre.w + dot3(rt, inverseInertia * rt);
+    if (c.body[against] >= 0) kt = kt + (otherInverseMass + dot3(ot, otherInverseInertia * ot));
+    precise const float stop = speed / (kt * h);
     const vec2 mu = c.friction[k].xy;
     force = force - (stop <= mu.x * push ? stop : min(stop, mu.y * push)) * slide;
   }

@@ -80,6 +80,43 @@ template <class Cloth> std::array<int, 2> pressTwoBoxes(Cloth& cloth, RigidWorld
   return boxes;
 }
 
+/// A ball pressing a cloth onto a box, both rigid bodies: the cloth (`sheet()`, with `thickness` 5 mm) lies on a
+/// 30 x 30 x 10 cm box resting on the world's ground, and a 3 cm ball lands on it at 0.5 m/s. The vertices under
+/// the ball are pinched between the two bodies.
+struct BallOnBox {
+  static constexpr double r = 0.03, thickness = 0.005, half = 0.05;  ///< the ball's radius, the box's half height
+  int box = -1, ball = -1;
+  /// The cloth: 21 x 21 vertices 1 cm apart, lying on the box's top.
+  static SheetDesc sheet() {
+    SheetDesc grid;
+    grid.nx = grid.ny = 21;
+    grid.spacing = 0.01;
+    grid.placement.position = {0, 0, 2 * half + thickness};
+    return grid;
+  }
+  template <class Cloth> BallOnBox(Cloth& cloth, RigidWorld& world) {
+    BodyDesc under;
+    under.shape = Box{{0.15, 0.15, half}};
+    under.pose.position = {0, 0, half};
+    under.density = 500;
+    box = world.add(under);
+    BodyDesc falling;
+    falling.shape = Sphere{r};
+    falling.pose.position = {0.002, -0.001, 2 * half + 2 * thickness + r + 0.002};
+    falling.linearVelocity = {0, 0, -0.5};
+    falling.density = 500;
+    ball = world.add(falling);
+    CouplingDesc coupling;
+    coupling.staticFriction = coupling.dynamicFriction = 0.3;
+    addCoupledBody(cloth, world, box, coupling);
+    addCoupledBody(cloth, world, ball, coupling);
+  }
+  /// The ball's centre over the box's top, less r: 2 thicknesses where the cloth holds them apart.
+  double gap(const RigidWorld& world) const {
+    return world.body(ball).pose().position.z() - world.body(box).pose().position.z() - half - r;
+  }
+};
+
 /// Gravity and no ground: the cloth alone holds what falls on it.
 inline RigidSettings noGround() {
   RigidSettings rigid;

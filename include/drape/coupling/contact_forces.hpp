@@ -156,32 +156,61 @@ void addSplitExchange(const SubstepView<S>& s, const ContactSlot<S>& c, Index i,
   out.exchanged.push_back({i, c.body, k, (weight * dv.dot(c.normal) * c.normal).template cast<double>()});
 }
 
-/// A vertex held between slot k's body and a fixed (static or kinematic) solid facing it cannot pass on the
-/// solid's push through its own momentum: its mass is far too small, and the estimates would hand the body a
-/// force of about m_vertex / h^2 per metre of overlap, which let a ball sink through a cloth lying on the floor
-/// to the floor itself (where the pinched vertices then shot out sideways at tens of m/s). The pinched cloth is
-/// a spacer instead: the solid holds the body through it, with the impulse that stops the body's approach at
-/// that point (its effective mass there), plus a share of the overlap per substep (kPinchRate), and Coulomb
-/// friction with the slot's coefficients against the body's sliding over the vertex. Recorded in the body's
-/// sums, shared out among its pinches at the end (addPinches). Returns false (nothing recorded) when the vertex
-/// is not pinched against a fixed solid.
+/// The slot of vertex i that pinches it against slot k's body: one whose normal opposes slot k's, a fixed
+/// (static or kinematic) solid's before another body's; -1 where there is none.
+template <Scalar S> int pinchingSlot(const ContactBuffer<S>& contacts, Index i, int k) {
+  const auto& slots = contacts.slots[i];
+  int fixed = -1, body = -1;
+  for (int j = 0; j < contacts.slotCount[i]; ++j) {
+    if (j == k || !(slots[j].normal.dot(slots[k].normal) < S(constants::kPinchOpposingCos))) continue;
+    if (slots[j].body < 0) fixed = j;
+    else if (slots[j].body != slots[k].body) body = j;
+  }
+  return fixed >= 0 ? fixed : body;
+}
+
+/// A vertex held between slot k's body and a surface facing it cannot pass on that surface's push through its
+/// own momentum: its mass is far too small, and the estimates would hand the body a force of about
+/// m_vertex / h^2 per metre of overlap, which let a ball sink through a cloth lying on the floor to the floor
+/// itself (where the pinched vertices then shot out sideways at tens of m/s), and let two bodies closing on each
+/// other crush the cloth between them (a vertex 5 mm into a hull in the rain). The pinched cloth is a spacer
+/// instead: it passes the body the impulse that stops the body's approach to the other surface at that point,
+/// plus a share of the overlap per substep (kPinchRate), and Coulomb friction with the slot's coefficients
+/// against the body's sliding over the vertex. Against a fixed (static or kinematic) solid the effective mass is
+/// the body's alone; against another body it is the pair's, `1 / (k_a + k_b)`, and each body's slot gives it
+/// its side of that exchange, so the two pushes are equal and opposite where the normals are. Recorded in the
+/// body's sums, shared out among its pinches at the end (addPinches). Returns false (nothing recorded) when the
+/// vertex is not pinched (pinchingSlot).
 template <Scalar S> bool pinchSupport(const SubstepView<S>& s, Index i, int k, Gathered& out) {
   const auto& slots = s.contacts.slots[i];
   const ContactSlot<S>& c = slots[k];
-  int against = -1;
-  for (int j = 0; j < s.contacts.slotCount[i]; ++j)
-    if (j != k && slots[j].body < 0 && slots[j].normal.dot(c.normal) < S(constants::kPinchOpposingCos)) against = j;
+  const int against = pinchingSlot(s.contacts, i, k);
   if (against < 0) return false;
+  const ContactSlot<S>& o = slots[against];
   const CoupledBody& body = *s.bodies[std::size_t(c.body)];
   const Eigen::Vector3d n = c.normal.template cast<double>();
   const Eigen::Vector3d r = contactPoint(s, c, i);
   const Eigen::Vector3d centre = s.centres[std::size_t(c.body)];
-  const Eigen::Vector3d wall = slots[against].solidVelocity.template cast<double>();
+  // The other surface's velocity at the vertex, and what its inertia adds to the exchange along a direction.
+  Eigen::Vector3d wall = o.solidVelocity.template cast<double>(), ro = Eigen::Vector3d::Zero();
+  const CoupledBody* other = o.body >= 0 ? s.bodies[std::size_t(o.body)] : nullptr;
+  if (other) {
+    ro = contactPoint(s, o, i);
+    wall = other->velocityAt(s.centres[std::size_t(o.body)] + ro);
+  }
+  auto inverseMassAlong = [&](const Eigen::Vector3d& d) {
+    const Eigen::Vector3d rd = r.cross(d);
+    double inverse = body.inverseMass() + rd.dot(body.inverseInertiaWorld() * rd);
+    if (other) {
+      const Eigen::Vector3d od = ro.cross(d);
+      inverse += other->inverseMass() + od.dot(other->inverseInertiaWorld() * od);
+    }
+    return inverse;
+  };
   const double h = double(s.h);
   const double approach = (body.velocityAt(centre + r) - wall).dot(n) +
                           constants::kPinchRate * double(unresolvedOverlap(s.contacts, s.state.x[i], i, k)) / h;
-  const Eigen::Vector3d rn = r.cross(n);
-  const double kn = body.inverseMass() + rn.dot(body.inverseInertiaWorld() * rn);
+  const double kn = inverseMassAlong(n);
   BodySums& p = out.sums[std::size_t(c.body)];
   ++p.pinches;
   if (!(approach > 0) || !(kn > 0)) return true;
@@ -192,8 +221,7 @@ template <Scalar S> bool pinchSupport(const SubstepView<S>& s, Index i, int k, G
   const double speed = slide.norm();
   if (speed > 0 && !s.normalOnly) {
     slide /= speed;
-    const Eigen::Vector3d rt = r.cross(slide);
-    const double stop = speed / ((body.inverseMass() + rt.dot(body.inverseInertiaWorld() * rt)) * h);
+    const double stop = speed / (inverseMassAlong(slide) * h);
     force -= (stop <= double(c.staticFriction) * push ? stop : std::min(stop, double(c.dynamicFriction) * push)) * slide;
   }
   addWrench(s, c, i, force, p.pinchForce, p.pinchTorque);
