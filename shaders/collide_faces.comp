@@ -325,13 +325,19 @@ bool nearestOnTriangle(vec3 p, vec3 a, vec3 b, vec3 c, out vec3 w) {
 bool searchFace(vec3 x0, vec3 x1, vec3 x2, float margin, out vec3 qb, out vec3 qn, out vec3 qp, out float qphi) {
 #if DRAPE_SHAPE == DRAPE_SHAPE_SPHERE
   // A ball is deepest where the face is nearest its centre: the closed form of nearestOnTriangle
-  // (include/drape/collision/pgd.hpp), culled by the squared distance.
+  // (include/drape/collision/pgd.hpp), culled first by the corners (a third of the longest edge's square below
+  // the nearest corner's squared distance bounds the face's), then by the squared distance.
   {
+    precise const float reach = shape[0].w + margin;
+    precise const vec3 d0 = x0 - shape[0].xyz, d1 = x1 - shape[0].xyz, d2 = x2 - shape[0].xyz;
+    precise const float corner = min(min(dot3(d0, d0), dot3(d1, d1)), dot3(d2, d2));
+    precise const float edge = max(max(dot3(x1 - x0, x1 - x0), dot3(x2 - x1, x2 - x1)), dot3(x0 - x2, x0 - x2));
+    precise const float clear = reach * (1.0 + DRAPE_CORNER_CULL_SLACK);
+    if (3.0 * (corner - clear * clear) > edge) return false;
     vec3 nb;
     if (nearestOnTriangle(shape[0].xyz, x0, x1, x2, nb)) {
       precise const vec3 p = (x0 + nb.y * (x1 - x0)) + nb.z * (x2 - x0);
       precise const vec3 d = p - shape[0].xyz;
-      precise const float reach = shape[0].w + margin;
       if (dot3(d, d) > reach * reach) return false;
       qb = nb, qp = p;
       qphi = sdf(p, qn);

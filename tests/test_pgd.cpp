@@ -372,6 +372,52 @@ TEMPLATE_TEST_CASE("on a ball the face search is the face's point nearest the ce
   }
 }
 
+TEMPLATE_TEST_CASE("a face is culled from a ball by its corners only where no point of it comes within the thickness",
+                   "[pgd][culling]", float, double) {
+  // An equilateral face whose centroid lies straight out from the centre is where the corners' bound (the nearest
+  // corner's squared distance less a third of the longest edge's square) is exact: a face there just inside the
+  // thickness must be kept, and just outside it is clear. A bound taking less than a third would cull the first.
+  using S = TestType;
+  const S thickness = S(drape::Settings{}.thickness);
+  const int iterations = drape::Settings{}.pgdIterations;
+  std::mt19937 rng(733);
+  int kept = 0, culled = 0;
+  for (const double radius : {0.3, 0.005}) {
+    const drape::Pose pose{randomRotation(rng), kWorld + randomInBall(rng, 0.2)};
+    const auto sdf = drape::detail::compileSdf<S>(drape::Sphere{radius}, pose, kOrigin);
+    const double reach = radius + double(thickness);
+    for (int k = 0; k < 300; ++k) {
+      const double side = std::array{0.005, 0.02, 0.05}[std::size_t(k % 3)];
+      const bool inside = k % 2 == 0;
+      // Within a thousandth of the reach of the thickness' edge, either side of it.
+      const double height = reach * (inside ? 1 - 1e-3 : 1 + 1e-3);
+      const V3 u = randomUnit(rng);
+      const V3 a = u.unitOrthogonal(), b = u.cross(a);
+      const double turn = uniform(rng, 0, 2 * std::numbers::pi), r = side / std::sqrt(3.0);
+      Tri tri;
+      for (int j = 0; j < 3; ++j) {
+        const double angle = turn + 2 * std::numbers::pi * j / 3;
+        tri.x[std::size_t(j)] = pose.position + height * u + r * (std::cos(angle) * a + std::sin(angle) * b);
+      }
+      const auto x = toLocal<S>(tri, kOrigin);
+      drape::FaceQuery<S> q;
+      const bool found = drape::queryFace<true>(sdf, x[0], x[1], x[2], thickness, iterations, q);
+      INFO("radius " << radius << " side " << side << (inside ? " inside" : " outside") << " the thickness");
+      if (inside) {
+        REQUIRE(found);
+        CHECK(q.phi < thickness);
+        ++kept;
+      } else {
+        CHECK((!found || q.phi >= thickness));
+        culled += !found;
+      }
+    }
+  }
+  std::printf("[pgd] %-6s ball, equilateral faces at the thickness: %d kept inside, %d of %d culled outside\n",
+              sizeof(S) == 4 ? "float" : "double", kept, culled, kept);
+  CHECK(culled > kept / 2);
+}
+
 // ============================================================================================================
 // 3. Culling
 

@@ -106,6 +106,20 @@ template <Scalar S> class VertexBins {
     });
   }
 
+  /// How many vertices vertices() would look at for the same box: those binned in the cells it meets.
+  Index countNear(const Vec3<S>& low, const Vec3<S>& high, S margin) const {
+    Index count = 0;
+    const Vec3<S> lo = low.array() - margin - drift_, hi = high.array() + margin + drift_;
+    std::array<int, 3> a{}, b{};
+    if (!cellRange(lo, hi, a, b)) return 0;
+    for (int k = a[2]; k <= b[2]; ++k)
+      for (int j = a[1]; j <= b[1]; ++j) {
+        const std::size_t row = linear(0, j, k);
+        count += cellStart_[row + std::size_t(b[0]) + 1] - cellStart_[row + std::size_t(a[0])];
+      }
+    return count;
+  }
+
   /// The faces that may have a point in [low, high] grown by margin, in ascending order. They are marked in a
   /// bit set as the cells give them, then read out word by word over the span of face indices marked (faces
   /// near one body are a few rows of the cloth: a few words), which costs less than sorting them.
@@ -146,15 +160,20 @@ template <Scalar S> class VertexBins {
   std::size_t linear(int i, int j, int k) const {
     return (std::size_t(k) * std::size_t(dims_[1]) + std::size_t(j)) * std::size_t(dims_[0]) + std::size_t(i);
   }
-  /// Calls f(vertex) for every vertex binned in a cell that meets [lo, hi].
-  template <class F> void visit(const Vec3<S>& lo, const Vec3<S>& hi, F&& f) const {
-    std::array<int, 3> a{}, b{};
+  /// The cells [a, b] that meet [lo, hi]; false where none does (or a bound is NaN).
+  bool cellRange(const Vec3<S>& lo, const Vec3<S>& hi, std::array<int, 3>& a, std::array<int, 3>& b) const {
     for (int k = 0; k < 3; ++k) {
       const S t0 = (lo[k] - low_[k]) * inv_, t1 = (hi[k] - low_[k]) * inv_;
-      if (!(t1 >= S(0)) || !(t0 < S(dims_[k]))) return;  // no cell in this range (or a NaN bound)
+      if (!(t1 >= S(0)) || !(t0 < S(dims_[k]))) return false;
       a[k] = t0 > S(0) ? int(t0) : 0;
       b[k] = int(std::min(t1, S(dims_[k] - 1)));
     }
+    return true;
+  }
+  /// Calls f(vertex) for every vertex binned in a cell that meets [lo, hi].
+  template <class F> void visit(const Vec3<S>& lo, const Vec3<S>& hi, F&& f) const {
+    std::array<int, 3> a{}, b{};
+    if (!cellRange(lo, hi, a, b)) return;
     for (int k = a[2]; k <= b[2]; ++k)
       for (int j = a[1]; j <= b[1]; ++j) {
         const std::size_t row = linear(0, j, k);

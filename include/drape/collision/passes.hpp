@@ -45,6 +45,8 @@ template <Scalar S> class ContactPasses {
   void setTopology(const std::vector<std::array<Index, 3>>& triangles, Index vertexCount, S cell) {
     contacts_.resize(vertexCount);
     bins_.setTopology(triangles, vertexCount, cell);
+    every_.resize(std::max(std::size_t(vertexCount), triangles.size()));
+    for (std::size_t k = 0; k < every_.size(); ++k) every_[k] = Index(k);
   }
 
   /// Before a substep: whether contacts with bounded solids go through the bins, and whether to keep the
@@ -155,20 +157,24 @@ template <Scalar S> class ContactPasses {
       DRAPE_OMP(single)
       {
         if (bins_.stale()) bins_.build(x, in.triangles);
-        bins_.vertices(x, solid.boxLow, solid.boxHigh, thickness + reach, nearVertices_);
+        // A solid whose box holds most of the cloth (a ball it is draped over) visits every vertex and face, each
+        // face behind its box check: the bins' lists would cost more than they save. Same contacts either way.
+        whole_ = 2 * bins_.countNear(solid.boxLow, solid.boxHigh, thickness + reach) >= n;
+        if (!whole_) bins_.vertices(x, solid.boxLow, solid.boxHigh, thickness + reach, nearVertices_);
       }
-      projectVertices<kSweep>(solid, in, ItemList{nearVertices_.data()}, Index(nearVertices_.size()),
+      const std::vector<Index>& near = whole_ ? every_ : nearVertices_;
+      projectVertices<kSweep>(solid, in, ItemList{near.data()}, whole_ ? n : Index(nearVertices_.size()),
                               bins_.binned(), slack);
       DRAPE_OMP(single)
       {
         bins_.noteDrift(moveBound_);
         moveBound_ = 0;
         if constexpr (kFacePass) {
-          bins_.faces(x, solid.boxLow, solid.boxHigh, thickness + reach, nearFaces_);
+          if (!whole_) bins_.faces(x, solid.boxLow, solid.boxHigh, thickness + reach, nearFaces_);
           bins_.noteDrift(projectFaceContacts<kCull, true, kSweep>(
-              solid, thickness, in.pgdIterations, in.triangles, ItemList{nearFaces_.data()},
-              Index(nearFaces_.size()), x, w, contacts_, stats_, bins_.binned(), in.exactGridSearch, in.sweep,
-              in.ownNormals, in.keepTurn));
+              solid, thickness, in.pgdIterations, in.triangles, ItemList{whole_ ? every_.data() : nearFaces_.data()},
+              whole_ ? Index(in.triangles.size()) : Index(nearFaces_.size()), x, w, contacts_, stats_,
+              bins_.binned(), in.exactGridSearch, in.sweep, in.ownNormals, in.keepTurn));
         }
       }
     } else {
@@ -238,6 +244,8 @@ template <Scalar S> class ContactPasses {
   CollisionStats stats_;
   VertexBins<S> bins_;
   std::vector<Index> nearVertices_, nearFaces_;  ///< what the bins found near the current solid
+  std::vector<Index> every_;  ///< 0, 1, 2, ...: every vertex and face, for a solid that holds most of the cloth
+  bool whole_ = false;        ///< the current solid visits every vertex and face (shared by the team)
   S moveBound_ = 0;         ///< the passes' largest vertex moves, summed (shared by the team)
   bool useBins_ = false;    ///< contacts with bounded solids go through the bins this substep
   bool binsFresh_ = false;  ///< the bins were built, and every move since is in their drift

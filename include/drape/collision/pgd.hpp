@@ -242,11 +242,22 @@ bool queryFace(const Field& sdf, const Vec3<S>& x0, const Vec3<S>& x1, const Vec
     // The distance to a point less a radius (a ball) is deepest where the face is nearest that point: found in
     // closed form, exact to rounding, where cutting planes close in on a curved field one cut at a time. The
     // exact minimum culls by itself, so the bounding sphere is not needed.
+    const S reach = sdf.radius + margin;
+    if constexpr (kCull) {
+      // Most faces near a ball are clear of it, and their corners tell so without the nearest point's branches:
+      // for p = sum b_k x_k, |p - c|^2 = sum b_k |x_k - c|^2 - sum_{j<k} b_j b_k |x_j - x_k|^2, so no point of
+      // the face is nearer than the nearest corner's squared distance less a third of the longest edge's square.
+      // Only faces that the nearest point would cull too are culled here (kCornerCullSlack).
+      const S corner = std::min({(x0 - sdf.centre).squaredNorm(), (x1 - sdf.centre).squaredNorm(),
+                                 (x2 - sdf.centre).squaredNorm()});
+      const S edge = std::max({(x1 - x0).squaredNorm(), (x2 - x1).squaredNorm(), (x0 - x2).squaredNorm()});
+      const S clear = reach * S(1 + constants::kCornerCullSlack);
+      if (S(3) * (corner - clear * clear) > edge) return false;  // no division: its latency was the test's cost
+    }
     Vec3<S> b;
     if (nearestOnTriangle<S>(sdf.centre, x0, x1, x2, b)) {
       const Vec3<S> p = x0 + b[1] * (x1 - x0) + b[2] * (x2 - x0);
-      // Most faces near a ball are clear of it: told by the squared distance, without a root or a division.
-      const S reach = sdf.radius + margin;
+      // The rest are told by the squared distance, without a root or a division.
       if (kCull && (p - sdf.centre).squaredNorm() > reach * reach) return false;
       Vec3<S> n;
       const S phi = sdf(p, n);
