@@ -1,6 +1,7 @@
 // docs/design.md §1, step 1 (the CPU twin: predictPositions in include/drape/cloth/integrate.hpp): a free vertex
 // (inverse mass w != 0) gains h g of velocity, keeps the share keepVelocity = exp(-airDamping h) of it (1 without
-// air damping, which leaves every bit as it was) and moves h v; a pinned one stays. The prediction goes to the
+// air damping, which leaves every bit as it was) and moves h v; a pinned one stays, its velocity set to zero (the
+// update then gives it its pin's move). The prediction goes to the
 // predicted positions (for the velocity update) and, with the inverse mass in w, to the packed positions the
 // solve works on; with keepStart (a scene with friction) the start positions are kept too. `precise` keeps every
 // product and sum rounded on its own, as the CPU kernel rounds them.
@@ -26,6 +27,8 @@ void main() {
     precise const vec3 vi = keepVelocity * (v[i].xyz + gh);
     v[i] = vec4(vi, 0.0);
     p = p + h * vi;
+  } else {
+    v[i] = vec4(0.0);  // a pinned vertex moves only where its pin takes it: the update measures that
   }
   xp[i] = vec4(p, 0.0);
   xw[i] = vec4(p, xi.w);
