@@ -1,10 +1,10 @@
 // docs/design.md §1, step 1 (the CPU twin: predictPositions in include/drape/cloth/integrate.hpp): a free vertex
 // (inverse mass w != 0) gains h g of velocity, keeps the share keepVelocity = exp(-airDamping h) of it (1 without
 // air damping, which leaves every bit as it was) and moves h v; a pinned one stays, its velocity set to zero (the
-// update then gives it its pin's move). The prediction goes to the
-// predicted positions (for the velocity update) and, with the inverse mass in w, to the packed positions the
-// solve works on; with keepStart (a scene with friction) the start positions are kept too. `precise` keeps every
-// product and sum rounded on its own, as the CPU kernel rounds them.
+// update then gives it its pin's move). The prediction goes to the predicted positions (for the velocity update)
+// and, with the inverse mass in w, to the packed positions the solve works on; with keepStart (a scene with
+// friction) the start positions are kept too. `precise` keeps every product and sum rounded on its own, as the CPU
+// kernel rounds them.
 layout(local_size_x = DRAPE_WORKGROUP) in;
 layout(std430, binding = DRAPE_B_POSITIONS) readonly buffer Positions { vec4 x[]; };
 layout(std430, binding = DRAPE_B_VELOCITIES) buffer Velocities { vec4 v[]; };
