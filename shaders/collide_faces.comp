@@ -696,7 +696,10 @@ void main() {
   precise const vec3 wb = vec3(a.w * qb.x, b.w * qb.y, c.w * qb.z);
   precise const float denom = dot3(wb, qb);
   if (denom <= 0.0) return;
-  precise const float depth = featureAlignedPush(x0, x1, x2, thickness - qphi, qb, qp, qn);
+  precise float depth = featureAlignedPush(x0, x1, x2, thickness - qphi, qb, qp, qn);
+  // No corner moves more than kFaceMoveCap times the depth (projectFaceContactsAs).
+  precise const float most = max(max(wb.x, wb.y), wb.z) / denom;
+  if (most > DRAPE_FACE_MOVE_CAP) depth *= DRAPE_FACE_MOVE_CAP / most;
   precise const vec3 placed = qp + depth * qn;  // where the moves carry the deepest point (a body's push acts there)
   for (int k = 0; k < 3; ++k) {
     if (wb[k] <= 0.0) continue;

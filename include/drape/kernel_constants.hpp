@@ -66,6 +66,13 @@ inline constexpr int kFeatureNewtonSteps = 2;
 /// The new direction is used, and a Newton step taken, only where the field grows at least this fast along it.
 inline constexpr double kFeatureMinRate = 0.05;
 
+// A face contact's moves (projectFaceContactsAs, docs/design.md §4).
+/// No corner of a face moves more than this many times the depth its deepest point is pushed: where the face's
+/// free corners carry little of that point (its other corners pinned, or far heavier), the exact move, depth /
+/// b, grows without bound as their weight b goes to 0. A uniform sheet's faces never reach it (at most 1.37
+/// with equal masses, 1.82 where one corner has a third of the others' mass).
+inline constexpr double kFaceMoveCap = 3;
+
 // Continuous contact (docs/design.md §18).
 /// A vertex whose path in a substep, relative to a solid, is shorter than this share of the thickness is left to
 /// the discrete passes: starting outside the thickness it cannot reach the solid's far side.

@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <limits>
 #include <random>
 #include <memory>
 #include <vector>
@@ -87,14 +88,18 @@ std::vector<Index> colourFaceIds(const drape::ClothAsset<float>& asset, const dr
   return ids;
 }
 
-/// The face pass of one solid over a flat 30 x 30 cloth (2 cm spacing, some vertices fixed), GPU against CPU:
-/// `place(origin)` gives the solid, poking into the cloth, whose local origin is `origin`.
+/// The face pass of one solid over a flat 30 x 30 cloth (2 cm spacing, some vertices fixed, and the first row
+/// too with `fixFirstRow`), GPU against CPU: `place(origin)` gives the solid, poking into the cloth, whose local
+/// origin is `origin`.
 template <class Shape, class Place>
-void compareFacePass(Place&& place, float normalTolerance = 1e-6f, float depthTolerance = 1e-12f) {
+void compareFacePass(Place&& place, float normalTolerance = 1e-6f, float depthTolerance = 1e-12f,
+                     bool fixFirstRow = false, double largestMove = std::numeric_limits<double>::infinity()) {
   drape::test::gpuContext().makeCurrent();
   const auto asset = kernelSheet();
   auto state = drape::ClothState<float>::fromAsset(asset, 0.1);
   for (Index i = 0; i < asset.vertexCount(); i += 11) state.invMass[std::size_t(i)] = 0;  // some fixed vertices
+  if (fixFirstRow)
+    for (Index i = 0; i < 30; ++i) state.invMass[std::size_t(i)] = 0;
   const drape::Solid<Shape> placed = place(state.origin);
   const auto solid = drape::detail::compileSolid<Shape, float>(placed, state.origin);
   const float thickness = 0.005f;
@@ -152,6 +157,7 @@ void compareFacePass(Place&& place, float normalTolerance = 1e-6f, float depthTo
   std::vector<Vec3<float>> gpuPositions(x.size());
   for (std::size_t i = 0; i < x.size(); ++i) gpuPositions[i] = {gpuX[i].x, gpuX[i].y, gpuX[i].z};
   REQUIRE(drape::test::largestDifference(x, state.x) > 1e-3);  // faces moved vertices by millimetres
+  CHECK(drape::test::largestDifference(x, state.x) <= largestMove);
   // Each face's search ends after a handful of evaluations on a certificate, so a bit of difference in one
   // field value could move a vertex by a rounding of its correction (1e-9 m): 4 ulp at the 0.3 m cloth.
   CHECK(drape::test::largestDifference(gpuPositions, x) <= 4 * 1.2e-7 * 0.3);
@@ -202,6 +208,22 @@ TEST_CASE("collide_faces: the GPU face pass against projectFaceContacts, colour 
       ball.staticFriction = 0.3;
       return ball;
     });
+  }
+  SECTION("a ball pressing beside a fixed row, where the faces' moves are capped (kFaceMoveCap)") {
+    // The faces between the fixed row and the next have their deepest point 1 mm from the fixed edge, 1 cm deep:
+    // their free corner's share is 0.05, so the uncapped move would be 20 times the depth (0.2 m); capped, 3 cm.
+    const auto state = drape::ClothState<float>::fromAsset(kernelSheet(), 0.1);
+    const Eigen::Vector3d a = state.x[14].cast<double>(), b = state.x[15].cast<double>();
+    const Eigen::Vector3d across = (state.x[44] - state.x[14]).cast<double>().normalized();
+    compareFacePass<drape::Sphere>(
+        [&](const Eigen::Vector3d& origin) {
+          drape::Solid<drape::Sphere> ball;
+          ball.shape.radius = 0.05;
+          ball.pose.position = origin + 0.5 * (a + b) + 0.001 * across + Eigen::Vector3d(0, 0, 0.05 + 0.005 - 0.01);
+          ball.staticFriction = 0.3;
+          return ball;
+        },
+        1e-6f, 1e-12f, true, 3 * 0.01 + 1e-6);
   }
   SECTION("a convex hull (a rock of 40 points), an edge and a corner up") {
     compareFacePass<drape::ConvexHull>([](const Eigen::Vector3d& origin) {

@@ -619,8 +619,13 @@ S projectFaceContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, int p
     if (denom <= S(0)) continue;
     ++stats.faceContacts;
     int extra = 0;
-    const S depth = featureAlignedPush(solid.sdf, x[t[0]], x[t[1]], x[t[2]], thickness, thickness - q.phi, q, extra);
+    S depth = featureAlignedPush(solid.sdf, x[t[0]], x[t[1]], x[t[2]], thickness, thickness - q.phi, q, extra);
     stats.sdfEvaluations += extra;
+    // Corner k moves wb_k / denom times the depth: unbounded where the free corners carry little of the deepest
+    // point (a body pressing a hammock beside its pinned border threw the next row 0.6 m in one substep). Capped
+    // at kFaceMoveCap times the depth, the point is cleared over several substeps instead.
+    const S most = std::max({wb[0], wb[1], wb[2]}) / denom;
+    if (most > S(constants::kFaceMoveCap)) depth *= S(constants::kFaceMoveCap) / most;
     const Vec3<S> placed = q.point + depth * q.normal;  // the moves below carry the deepest point there
     for (int k = 0; k < 3; ++k) {
       if (wb[k] <= S(0)) continue;

@@ -267,6 +267,7 @@ inline std::string preamble(const std::string& defines = {}) {
   s += define("DRAPE_PARALLEL_PLANES", constants::kParallelPlanes);
   s += define("DRAPE_CORNER_DETERMINANT", constants::kCornerDeterminant);
   s += define("DRAPE_REACH", constants::kReach);
+  s += define("DRAPE_FACE_MOVE_CAP", constants::kFaceMoveCap);
   s += define("DRAPE_LEAST_SQUARES_PASSES", constants::kLeastSquaresPasses);
   s += define("DRAPE_EIGEN_SWEEPS", constants::kEigenSweeps);
   s += define("DRAPE_EIGEN_NEGLIGIBLE", constants::kEigenNegligible);
