@@ -8,7 +8,9 @@
 // bounds from the cells' trilinear polynomials. Where that point is closer than the thickness, the face's
 // vertices move along the normal, weighted by barycentric weight and inverse mass, to carry it to the thickness.
 // The moves are recorded in the vertices' contacts (recordContact, as the CPU records them). With continuous contact
-// (docs/design.md §18), a face that travelled far is first searched along its path (sweepFace).
+// (docs/design.md §18), a face that travelled far is first searched along its path (sweepFace); that code is
+// compiled only into the kernels of a scene with continuous contact (DRAPE_SWEEP), as a uniform branch around it
+// still costs where the driver runs both sides of a branch.
 //
 // The CPU visits every face in index order; here the colours go in turn and the faces of one colour at once,
 // which is another order of the same Gauss-Seidel pass: a colour's faces on their own give the CPU's bits.
@@ -26,8 +28,10 @@ layout(location = DRAPE_U_PGD_ITERATIONS) uniform int maxIterations;
 layout(location = DRAPE_U_FRICTION) uniform vec2 friction;  // static, dynamic
 layout(location = DRAPE_U_BOX_LOW) uniform vec3 boxLow;
 layout(location = DRAPE_U_BOX_HIGH) uniform vec3 boxHigh;
+#if DRAPE_SWEEP
 layout(std430, binding = DRAPE_B_START) readonly buffer Start { vec4 starts[]; };
 layout(location = DRAPE_U_SWEEP) uniform vec2 sweep;  // the substep h and the gate squared; 0 (unset): no sweeps
+#endif
 #if DRAPE_BODY
 layout(std430, binding = DRAPE_B_LINES) buffer LinesBuffer { Lines lines[]; };
 layout(location = DRAPE_U_BODY) uniform int body;  // the coupled body this solid pushes
@@ -641,6 +645,7 @@ void main() {
   const uvec4 t = faces[first + gl_GlobalInvocationID.x];
   vec4 a = x[t.x], b = x[t.y], c = x[t.z];
   precise const vec3 low = boxLow - vec3(thickness), high = boxHigh + vec3(thickness);
+#if DRAPE_SWEEP
   if (sweep.y > 0.0) {
     // Continuous contact: a face whose corners travelled further than the gate relative to the solid is searched
     // along its path first; from its first contact on, no corner goes further against the contact normal than it
@@ -683,6 +688,7 @@ void main() {
       a = x[t.x], b = x[t.y], c = x[t.z];
     }
   }
+#endif
   const vec3 x0 = a.xyz, x1 = b.xyz, x2 = c.xyz;
   // A face whose box misses the solid's box grown by the thickness has no point within the thickness of it
   // (projectFaceContactsAs with kBoxed): culled before any field evaluation.

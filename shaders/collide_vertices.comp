@@ -3,16 +3,18 @@
 // field's gradient to the thickness, and its contact is recorded for the response (recordContact): normal and
 // correction, the solid's velocity at the placed point, its friction (and for a coupled body, the line its push acts
 // on: the placed point). The substep's first pass (fresh) starts every vertex's record, so nothing is cleared. In a
-// settle pass (pass >= 0) the dispatch does nothing unless the pass before found a contact, and a contact found marks
-// this pass's flag: the CPU's loop that stops once a pass finds none, without reading anything back.
+// settle pass (pass >= 0) a contact found writes this pass's dispatch command, which runs the next pass and this
+// pass's settle (dispatchIndirect; the commands are cleared to no work): the CPU's loop that stops once a pass
+// finds none, without reading anything back, and a pass with nothing to do costs no invocation.
 // With continuous contact (docs/design.md §18; sweep.y > 0, the substep's first pass only), a vertex whose path
 // relative to the solid is longer than the gate is first searched along it (sweepPoint in
 // include/drape/collision/sweep.hpp); where it came within the thickness, the vertex goes to the thickness beyond
-// the field's tangent plane there.
+// the field's tangent plane there. That code is compiled only into the kernels of a scene with continuous contact
+// (DRAPE_SWEEP): a uniform branch around it still costs where the driver runs both sides of a branch.
 layout(local_size_x = DRAPE_WORKGROUP) in;
 layout(std430, binding = DRAPE_B_POSITIONS) buffer Positions { vec4 x[]; };
 layout(std430, binding = DRAPE_B_CONTACTS) buffer Contacts { Contact contacts[]; };
-layout(std430, binding = DRAPE_B_FLAGS) buffer Flags { uint flags[]; };
+layout(std430, binding = DRAPE_B_FLAGS) writeonly buffer Flags { uint commands[]; };  // x, y, z per settle pass
 layout(location = DRAPE_U_COUNT) uniform uint count;
 layout(location = DRAPE_U_THICKNESS) uniform float thickness;
 layout(location = DRAPE_U_SOLID_CENTRE) uniform vec3 centre;
@@ -30,6 +32,7 @@ layout(location = DRAPE_U_PASS) uniform int pass;
 layout(location = DRAPE_U_FRESH) uniform uint fresh;
 layout(location = DRAPE_U_BOX_LOW) uniform vec3 boxLow;
 layout(location = DRAPE_U_BOX_HIGH) uniform vec3 boxHigh;
+#if DRAPE_SWEEP
 layout(std430, binding = DRAPE_B_START) readonly buffer Start { vec4 x0[]; };
 layout(location = DRAPE_U_SWEEP) uniform vec2 sweep;  // the substep h and the gate squared; 0 (unset): no sweeps
 
@@ -52,17 +55,18 @@ bool sweepPoint(vec3 a, vec3 b, out vec3 q, out vec3 n, out float phiHit) {
   }
   return false;
 }
+#endif
 
 void main() {
   const uint i = gl_GlobalInvocationID.x;
   if (i >= count) return;
-  if (pass > 0 && flags[pass - 1] == 0u) return;
   vec4 xi = x[i];
   bool found = false;
   Contact c;
   // Outside the solid's box grown by the thickness, phi is beyond the thickness: no field evaluation (what the
   // CPU's broad phase leaves out). A swept path is tested by its own box.
   precise const vec3 low = boxLow - vec3(thickness), high = boxHigh + vec3(thickness);
+#if DRAPE_SWEEP
   if (sweep.y > 0.0 && xi.w != 0.0) {
     const vec3 s0 = x0[i].xyz;
     precise const vec3 from = s0 + sweep.x * solidVelocityAt(s0, centre, linearVelocity, angularVelocity);
@@ -90,6 +94,7 @@ void main() {
       }
     }
   }
+#endif
   const bool near = all(greaterThanEqual(xi.xyz, low)) && all(lessThanEqual(xi.xyz, high));
   if (xi.w != 0.0 && near) {
     vec3 n;
@@ -117,5 +122,9 @@ void main() {
 #endif
   }
   if (!found && fresh != 0u) contacts[i].slots = uvec4(0u);
-  if (found && pass >= 0) flags[pass] = 1u;
+  if (found && pass >= 0) {  // every writer writes the same command: this dispatch's size
+    commands[3 * pass] = gl_NumWorkGroups.x;
+    commands[3 * pass + 1] = 1u;
+    commands[3 * pass + 2] = 1u;
+  }
 }

@@ -2,20 +2,17 @@
 // with contacts in two or three slots goes to the nearest point outside all their half-spaces at once
 // (nearestInHalfSpaces), a pinched one starting its least-squares placement from where the solve left it (the
 // packed positions, which the velocity update left as the solved ones). A record that overflowed is left to the
-// passes on the true fields. In a settle pass (pass >= 0) it runs only if that pass's vertex passes found a
-// contact.
+// passes on the true fields. In a settle pass (pass >= 0) it is dispatched only if that pass's vertex passes found
+// a contact (their dispatch command).
 layout(local_size_x = DRAPE_WORKGROUP) in;
 layout(std430, binding = DRAPE_B_POSITIONS) buffer Positions { vec4 x[]; };
 layout(std430, binding = DRAPE_B_PACKED) readonly buffer Packed { vec4 xw[]; };
 layout(std430, binding = DRAPE_B_CONTACTS) readonly buffer Contacts { Contact contacts[]; };
-layout(std430, binding = DRAPE_B_FLAGS) readonly buffer Flags { uint flags[]; };
 layout(location = DRAPE_U_COUNT) uniform uint count;
-layout(location = DRAPE_U_PASS) uniform int pass;
 
 void main() {
   const uint i = gl_GlobalInvocationID.x;
   if (i >= count) return;
-  if (pass >= 0 && flags[pass] == 0u) return;
   const uvec4 slots = contacts[i].slots;
   if (slots.x < 2u || slots.y != 0u) return;
   vec3 normals[DRAPE_CONTACT_SLOTS];

@@ -332,14 +332,16 @@ template <class Shape, class Place> void compareSweptPasses(Place&& place, doubl
     k.set(layout::kBoxHigh, solid.boxHigh.x(), solid.boxHigh.y(), solid.boxHigh.z());
     k.set(layout::kSweep, h, gate * gate);
   };
-  drape::gpu::Program kv("collide_vertices", drape::gpu::shaders::collide_vertices, drape::gpu::shapeDefine<Shape>());
+  // The kernels with the path searches compiled in (SolidKernels::compileSweepFor).
+  const std::string define = drape::gpu::shapeDefine<Shape>() + "#define DRAPE_SWEEP 1\n";
+  drape::gpu::Program kv("collide_vertices", drape::gpu::shaders::collide_vertices, define);
   common(kv);
   kv.set(layout::kCount, unsigned(asset.vertexCount()));
   kv.set(layout::kSlack, 0.0f);
   glProgramUniform1i(kv.id(), layout::kPass, -1);
   kv.set(layout::kFresh, 1u);
   kv.dispatch(std::size_t(asset.vertexCount()));
-  drape::gpu::Program kf("collide_faces", drape::gpu::shaders::collide_faces, drape::gpu::shapeDefine<Shape>());
+  drape::gpu::Program kf("collide_faces", drape::gpu::shaders::collide_faces, define);
   common(kf);
   glProgramUniform1i(kf.id(), layout::kPgdIterations, iterations);
   for (std::size_t c = 0; c + 1 < coloured.offsets.size(); ++c) {

@@ -36,7 +36,7 @@ enum Binding : unsigned {
   kPins = 13,             ///< PinSlot per pin
   kPinLambdas = 14,       ///< float per pin: its XPBD multiplier in the current substep
   kShapeData = 15,        ///< vec4s: a grid field's nodes ((normal, distance), x fastest) or a hull's faces and edges
-  kFlags = 16,            ///< uint per settle pass: 1 once a vertex pass of that pass found a contact
+  kFlags = 16,            ///< per settle pass, the dispatch command (3 uints) its vertex passes write on a contact
   // The coupling with dynamic bodies (only in a scene that has them):
   kVStart = 17,           ///< vec4 per vertex: the velocity at the start of the substep
   kVPre = 18,             ///< vec4 per vertex: the velocity before the contacts acted
@@ -311,6 +311,7 @@ inline std::string preamble(const std::string& defines = {}) {
   s += "#ifndef DRAPE_FRICTION\n#define DRAPE_FRICTION 1\n#endif\n";
   s += "#ifndef DRAPE_BODY\n#define DRAPE_BODY 0\n#endif\n";
   s += "#ifndef DRAPE_GUARD\n#define DRAPE_GUARD 0\n#endif\n";
+  s += "#ifndef DRAPE_SWEEP\n#define DRAPE_SWEEP 0\n#endif\n";
   s += "struct Constraint { uint a; uint b; float rest; uint pad; };\n";
   s += "struct Contact { vec4 normal[DRAPE_CONTACT_SLOTS]; vec4 velocity[DRAPE_CONTACT_SLOTS]; "
        "vec4 friction[DRAPE_CONTACT_SLOTS]; ivec4 body; uvec4 slots; vec4 normalDv; };\n";

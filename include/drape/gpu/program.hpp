@@ -74,6 +74,17 @@ class Program {
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
   }
 
+  /// Runs the kernel over the workgroups an earlier kernel wrote to buffer `commands` at byte `offset` (x, y, z as
+  /// three uints; x = 0: nothing runs). A pass that has nothing to do then costs no invocation, and nothing is
+  /// read back to learn it.
+  void dispatchIndirect(GLuint commands, GLintptr offset) const {
+    glMemoryBarrier(GL_COMMAND_BARRIER_BIT);
+    glUseProgram(id_);
+    glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, commands);
+    glDispatchComputeIndirect(offset);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+  }
+
  private:
   static std::string infoLog(GLuint object, bool program) {
     GLint length = 0;

@@ -53,6 +53,28 @@ class SolidKernels {
     }
   }
 
+  /// Continuous contact's twins of the shape's vertex and face kernels (a coupled body's too, `body`), with the
+  /// path searches compiled in (DRAPE_SWEEP); compiled on the first substep that sweeps, before anything moves.
+  /// The other kernels leave that code out rather than branch around it: a driver that runs both sides of a
+  /// branch (Mesa's llvmpipe does) would pay for it in every pass (docs/design.md §9).
+  template <class Shape> void compileSweepFor(const CompiledSolid<Shape, float>&, bool body) {
+    if constexpr (!Sdf<Shape, float>::kLinear) {
+      ShapeKernels& k = kernels_[shapeCode<Shape>()];
+      const std::string define = shapeDefine<Shape>() + "#define DRAPE_SWEEP 1\n";
+      if (!k.sweepReady) {
+        k.sweepVertices = Program("collide_vertices", shaders::collide_vertices, define);
+        k.sweepFaces = Program("collide_faces", shaders::collide_faces, define);
+        k.sweepReady = true;
+      }
+      if (body && !k.sweepBodyReady) {
+        const std::string bodyDefine = define + "#define DRAPE_BODY 1\n";
+        k.sweepVerticesBody = Program("collide_vertices", shaders::collide_vertices, bodyDefine);
+        k.sweepFacesBody = Program("collide_faces", shaders::collide_faces, bodyDefine);
+        k.sweepBodyReady = true;
+      }
+    }
+  }
+
   /// The shape data a solid's field reads from its own buffer (layout::kShapeData): a mesh's grid nodes, a hull's
   /// faces and edges. Each grid is uploaded once, however many solids share it; each hull solid builds its own
   /// query data (compileSolid), so it has its own upload.
@@ -114,24 +136,31 @@ class SolidKernels {
   /// One solid's vertex pass (projectVertexContacts): `fresh` for the substep's first, which starts every
   /// record; `pass` the settle pass (-1: the first pass), `slack` what the settle passes leave alone.
   /// `sweep`: continuous contact's substep and gate squared, (0, 0) for none (a settle pass, or the setting off).
+  /// `command` >= 0: dispatched by the command at that byte offset of buffer `commands` (Program::dispatchIndirect).
   void vertexPass(const SolidPass& p, float thickness, unsigned vertexCount, bool fresh, int pass, float slack,
-                  const Eigen::Vector2f& sweep = Eigen::Vector2f::Zero()) const {
-    const Program& k = p.motion.body >= 0 ? kernels_[p.code].verticesBody : kernels_[p.code].vertices;
+                  const Eigen::Vector2f& sweep = Eigen::Vector2f::Zero(), GLuint commands = 0,
+                  GLintptr command = -1) const {
+    const ShapeKernels& ks = kernels_[p.code];
+    const bool body = p.motion.body >= 0, swept = sweep.y() > 0;  // no sweep: the same as the kernel without it
+    const Program& k = swept ? (body ? ks.sweepVerticesBody : ks.sweepVertices) : (body ? ks.verticesBody : ks.vertices);
     setUniforms(k, p, thickness);
-    k.set(layout::kSweep, sweep.x(), sweep.y());
+    if (swept) k.set(layout::kSweep, sweep.x(), sweep.y());
     k.set(layout::kCount, vertexCount);
     k.set(layout::kSlack, slack);
     glProgramUniform1i(k.id(), layout::kPass, pass);
     k.set(layout::kFresh, unsigned(fresh));
-    k.dispatch(vertexCount);
+    if (command >= 0) k.dispatchIndirect(commands, command);
+    else k.dispatch(vertexCount);
   }
 
   /// One curved solid's face pass (projectFaceContacts), colour by colour.
   void facePass(const SolidPass& p, float thickness, int pgdIterations, const std::vector<std::size_t>& colourOffsets,
                 const Eigen::Vector2f& sweep = Eigen::Vector2f::Zero()) const {
-    const Program& k = p.motion.body >= 0 ? kernels_[p.code].facesBody : kernels_[p.code].faces;
+    const ShapeKernels& ks = kernels_[p.code];
+    const bool body = p.motion.body >= 0, swept = sweep.y() > 0;
+    const Program& k = swept ? (body ? ks.sweepFacesBody : ks.sweepFaces) : (body ? ks.facesBody : ks.faces);
     setUniforms(k, p, thickness);
-    k.set(layout::kSweep, sweep.x(), sweep.y());
+    if (swept) k.set(layout::kSweep, sweep.x(), sweep.y());
     glProgramUniform1i(k.id(), layout::kPgdIterations, pgdIterations);
     for (std::size_t c = 0; c + 1 < colourOffsets.size(); ++c) {
       const std::size_t count = colourOffsets[c + 1] - colourOffsets[c];
@@ -183,7 +212,8 @@ class SolidKernels {
     Program vertices, faces, repel;
     Program verticesBody, facesBody, repelBody;  ///< for a coupled body's solid: its lines and pushes kept too
     Program guard;                               ///< the friction guard (compileGuardFor)
-    bool ready = false, bodyReady = false, guardReady = false;
+    Program sweepVertices, sweepFaces, sweepVerticesBody, sweepFacesBody;  ///< with the path searches (compileSweepFor)
+    bool ready = false, bodyReady = false, guardReady = false, sweepReady = false, sweepBodyReady = false;
   };
   std::array<ShapeKernels, 8> kernels_;  ///< by layout::ShapeCode
   struct ShapeData {

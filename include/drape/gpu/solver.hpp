@@ -126,7 +126,7 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
     contacts_.assign(std::vector<layout::Contact>(zero.size(), layout::Contact{}));
     rings_.assign(std::vector<layout::Ring>(zero.size(), layout::Ring{}));
     reduction_.assign(std::vector<layout::Vertex>(1));
-    flags_.assign(std::vector<std::uint32_t>(constants::kSettlePasses, 0u));
+    flags_.assign(std::vector<std::uint32_t>(3 * constants::kSettlePasses, 0u));
     const Adjacency& around = asset_->vertexNeighbours;
     neighbourOffsets_.assign(std::vector<std::uint32_t>(around.offsets.begin(), around.offsets.end()));
     neighbours_.assign(std::vector<std::uint32_t>(around.items.begin(), around.items.end()));
@@ -227,9 +227,12 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
   /// kinematic (prepareSolids) and its field packed for the kernels (packShape).
   void prepareSolids(double hd) {
     passes_.clear();
+    const bool maySweep = settings_.continuousContact && settings_.collisionMethod != CollisionMethod::InSolve;
     const bool mayGuard = settings_.continuousContact && settings_.collisionMethod == CollisionMethod::Faces;
     const SolidFeatures has = Front::prepareSolids(hd, [&](const auto& compiled, const auto&) {
       passes_.push_back(kernels_.pass(compiled));
+      if (maySweep && compiled.bounded)
+        kernels_.compileSweepFor(compiled, compiled.motion.body >= 0);
       if (mayGuard && compiled.bounded) kernels_.compileGuardFor(compiled);
     });
     friction_ = has.friction;
@@ -247,12 +250,14 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
   }
 
   /// Vertices with several contact planes go outside all of them (projectOntoContactPlanes); in settle pass
-  /// `pass` only if that pass found a contact.
+  /// `pass` only if that pass found a contact (the command its vertex passes wrote).
   void settle(int pass) {
     settle_.set(layout::kCount, unsigned(vertexCount()));
-    glProgramUniform1i(settle_.id(), layout::kPass, pass);
-    settle_.dispatch(std::size_t(vertexCount()));
+    if (pass < 0) settle_.dispatch(std::size_t(vertexCount()));
+    else settle_.dispatchIndirect(flags_.id(), settleCommand(pass));
   }
+  /// Where settle pass `pass`'s dispatch command lies in flags_, in bytes.
+  static GLintptr settleCommand(int pass) { return GLintptr(3 * sizeof(std::uint32_t)) * pass; }
 
   /// What coupled body b's repulsion region took from or gave the vertices, reversed onto the body
   /// (gatherRepulsionForces): the pushes its repel kernel wrote (to b alone), summed, start the substep's force
@@ -288,7 +293,10 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
     glClearNamedBufferData(flags_.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, nullptr);
     const float slack = float(constants::kSettleSlack) * thickness;
     for (int pass = 0; pass < constants::kSettlePasses; ++pass) {
-      for (const SolidPass& p : passes_) kernels_.vertexPass(p, thickness, n, false, pass, slack);
+      // The first settle pass always runs; each later one only if the one before it found a contact.
+      const GLintptr command = pass == 0 ? -1 : settleCommand(pass - 1);
+      for (const SolidPass& p : passes_)
+        kernels_.vertexPass(p, thickness, n, false, pass, slack, Eigen::Vector2f::Zero(), flags_.id(), command);
       settle(pass);
     }
   }
@@ -507,7 +515,7 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
   bool repulsive_ = false;   ///< some solid has a repulsion region this substep
   bool reconcile_ = false;   ///< a vertex may touch several surfaces this substep (a curved solid, or several)
   SolidKernels kernels_;  ///< each shape type's kernels, and the solids' shape data
-  Buffer<std::uint32_t> flags_;   ///< per settle pass: whether its vertex passes found a contact
+  Buffer<std::uint32_t> flags_;   ///< per settle pass, a dispatch command: its vertex passes found a contact
   bool coupled_ = false;          ///< some solid is a dynamic body this substep
   bool sweep_ = false;            ///< continuous contact this substep (the setting, and a bounded solid)
   bool guard_ = false;            ///< and friction's moves are guarded (guardFriction)
