@@ -302,7 +302,8 @@ TEST_CASE("collide_vertices in a settle pass writes that pass's dispatch command
   const auto solid = drape::detail::compileSolid<drape::Box, float>(floor, Eigen::Vector3d::Zero());
   const float thickness = 0.005f;
   const int n = 300;  // more than one workgroup
-  drape::gpu::Program k("collide_vertices", drape::gpu::shaders::collide_vertices, drape::gpu::shapeDefine<drape::Box>());
+  drape::gpu::Program k("collide_vertices", drape::gpu::shaders::collide_vertices,
+                        drape::gpu::shapeDefine<drape::Box>());
   k.set(layout::kThickness, thickness);
   drape::gpu::setShape(k.id(), drape::gpu::packShape(solid.sdf));
   k.set(layout::kSolidCentre, solid.motion.centre.x(), solid.motion.centre.y(), solid.motion.centre.z());

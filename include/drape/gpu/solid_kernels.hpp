@@ -142,7 +142,8 @@ class SolidKernels {
                   GLintptr command = -1) const {
     const ShapeKernels& ks = kernels_[p.code];
     const bool body = p.motion.body >= 0, swept = sweep.y() > 0;  // no sweep: the same as the kernel without it
-    const Program& k = swept ? (body ? ks.sweepVerticesBody : ks.sweepVertices) : (body ? ks.verticesBody : ks.vertices);
+    const Program& k =
+        swept ? (body ? ks.sweepVerticesBody : ks.sweepVertices) : (body ? ks.verticesBody : ks.vertices);
     setUniforms(k, p, thickness);
     if (swept) k.set(layout::kSweep, sweep.x(), sweep.y());
     k.set(layout::kCount, vertexCount);
