@@ -304,14 +304,7 @@ TEST_CASE("collide_vertices in a settle pass writes that pass's dispatch command
   const int n = 300;  // more than one workgroup
   drape::gpu::Program k("collide_vertices", drape::gpu::shaders::collide_vertices,
                         drape::gpu::shapeDefine<drape::Box>());
-  k.set(layout::kThickness, thickness);
-  drape::gpu::setShape(k.id(), drape::gpu::packShape(solid.sdf));
-  k.set(layout::kSolidCentre, solid.motion.centre.x(), solid.motion.centre.y(), solid.motion.centre.z());
-  k.set(layout::kSolidLinear, 0.0f, 0.0f, 0.0f);
-  k.set(layout::kSolidAngular, 0.0f, 0.0f, 0.0f);
-  glProgramUniform2f(k.id(), layout::kFriction, 0.0f, 0.0f);
-  k.set(layout::kBoxLow, solid.boxLow.x(), solid.boxLow.y(), solid.boxLow.z());
-  k.set(layout::kBoxHigh, solid.boxHigh.x(), solid.boxHigh.y(), solid.boxHigh.z());
+  drape::gpu::SolidKernels::setUniforms(k, drape::gpu::SolidKernels{}.pass(solid), thickness);
   k.set(layout::kCount, unsigned(n));
   k.set(layout::kSlack, 0.0f);
   k.set(layout::kFresh, 0u);
@@ -417,14 +410,7 @@ TEST_CASE("collide_vertices: a surface that finds every slot taken, against the 
   flags.bind(layout::kFlags);
   drape::gpu::Program k("collide_vertices", drape::gpu::shaders::collide_vertices,
                         drape::gpu::shapeDefine<drape::Box>());
-  k.set(layout::kThickness, thickness);
-  drape::gpu::setShape(k.id(), drape::gpu::packShape(solid.sdf));
-  k.set(layout::kSolidCentre, solid.motion.centre.x(), solid.motion.centre.y(), solid.motion.centre.z());
-  k.set(layout::kSolidLinear, 0.0f, 0.0f, 0.0f);
-  k.set(layout::kSolidAngular, 0.0f, 0.0f, 0.0f);
-  glProgramUniform2f(k.id(), layout::kFriction, solid.motion.staticFriction, solid.motion.dynamicFriction);
-  k.set(layout::kBoxLow, solid.boxLow.x(), solid.boxLow.y(), solid.boxLow.z());
-  k.set(layout::kBoxHigh, solid.boxHigh.x(), solid.boxHigh.y(), solid.boxHigh.z());
+  drape::gpu::SolidKernels::setUniforms(k, drape::gpu::SolidKernels{}.pass(solid), thickness);
   k.set(layout::kCount, unsigned(n));
   k.set(layout::kSlack, 0.0f);
   glProgramUniform1i(k.id(), layout::kPass, -1);

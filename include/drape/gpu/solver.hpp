@@ -126,7 +126,7 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
     contacts_.assign(std::vector<layout::Contact>(zero.size(), layout::Contact{}));
     rings_.assign(std::vector<layout::Ring>(zero.size(), layout::Ring{}));
     reduction_.assign(std::vector<layout::Vertex>(1));
-    flags_.assign(std::vector<std::uint32_t>(3 * constants::kSettlePasses, 0u));
+    settleCommands_.assign(std::vector<std::uint32_t>(3 * constants::kSettlePasses, 0u));
     const Adjacency& around = asset_->vertexNeighbours;
     neighbourOffsets_.assign(std::vector<std::uint32_t>(around.offsets.begin(), around.offsets.end()));
     neighbours_.assign(std::vector<std::uint32_t>(around.items.begin(), around.items.end()));
@@ -254,9 +254,9 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
   void settle(int pass) {
     settle_.set(layout::kCount, unsigned(vertexCount()));
     if (pass < 0) settle_.dispatch(std::size_t(vertexCount()));
-    else settle_.dispatchIndirect(flags_.id(), settleCommand(pass));
+    else settle_.dispatchIndirect(settleCommands_.id(), settleCommand(pass));
   }
-  /// Where settle pass `pass`'s dispatch command lies in flags_, in bytes.
+  /// Where settle pass `pass`'s dispatch command lies in settleCommands_, in bytes.
   static GLintptr settleCommand(int pass) { return GLintptr(3 * sizeof(std::uint32_t)) * pass; }
 
   /// What coupled body b's repulsion region took from or gave the vertices, reversed onto the body
@@ -290,13 +290,14 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
     settle(-1);
     if (passes_.size() < 2) return;
     glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);  // a clear after shader writes
-    glClearNamedBufferData(flags_.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, nullptr);
+    glClearNamedBufferData(settleCommands_.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, nullptr);
     const float slack = float(constants::kSettleSlack) * thickness;
     for (int pass = 0; pass < constants::kSettlePasses; ++pass) {
       // The first settle pass always runs; each later one only if the one before it found a contact.
       const GLintptr command = pass == 0 ? -1 : settleCommand(pass - 1);
       for (const SolidPass& p : passes_)
-        kernels_.vertexPass(p, thickness, n, false, pass, slack, Eigen::Vector2f::Zero(), flags_.id(), command);
+        kernels_.vertexPass(p, thickness, n, false, pass, slack, Eigen::Vector2f::Zero(), settleCommands_.id(),
+                            command);
       settle(pass);
     }
   }
@@ -360,7 +361,7 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
     neighbourOffsets_.bind(layout::kNeighbourOffsets);
     neighbours_.bind(layout::kNeighbours);
     rings_.bind(layout::kPropagation);
-    flags_.bind(layout::kFlags);
+    settleCommands_.bind(layout::kFlags);
     if (coupled_) coupling_.bind();
   }
 
@@ -515,7 +516,7 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
   bool repulsive_ = false;   ///< some solid has a repulsion region this substep
   bool reconcile_ = false;   ///< a vertex may touch several surfaces this substep (a curved solid, or several)
   SolidKernels kernels_;  ///< each shape type's kernels, and the solids' shape data
-  Buffer<std::uint32_t> flags_;   ///< per settle pass, a dispatch command: its vertex passes found a contact
+  Buffer<std::uint32_t> settleCommands_;  ///< per settle pass, the dispatch command its vertex passes write
   bool coupled_ = false;          ///< some solid is a dynamic body this substep
   bool sweep_ = false;            ///< continuous contact this substep (the setting, and a bounded solid)
   bool guard_ = false;            ///< and friction's moves are guarded (guardFriction)
