@@ -172,13 +172,14 @@ void ballScene(benchmark::State& state) {
   settings.collisionMethod = state.range(0) == 0 ? drape::CollisionMethod::Faces : drape::CollisionMethod::Vertices;
   settings.threadCount = int(state.range(2));
   drape::Solver<float> solver = settledOnBall(settings, state.range(1) == 256);
-  long long faceContacts = 0, vertexContacts = 0, facesTested = 0, facesCulled = 0, steps = 0;
+  long long faceContacts = 0, vertexContacts = 0, facesTested = 0, facesCulled = 0, keptClear = 0, steps = 0;
   for (auto _ : state) {
     solver.step(1.0 / 60, [&](const auto& s) {
       faceContacts += s.stats().faceContacts;
       vertexContacts += s.stats().vertexContacts;
       facesTested += s.stats().facesTested;
       facesCulled += s.stats().facesCulled;
+      keptClear += s.stats().facesKeptClear;
     });
     ++steps;
     benchmark::ClobberMemory();
@@ -191,6 +192,7 @@ void ballScene(benchmark::State& state) {
   state.counters["vertex_contacts"] = double(vertexContacts) / substeps;
   state.counters["faces_tested"] = double(facesTested) / substeps;
   state.counters["faces_culled"] = double(facesCulled) / substeps;
+  state.counters["faces_kept_clear"] = double(keptClear) / substeps;
 }
 
 /// What Settings::keepAngularMomentum costs (docs/design.md §4), on one thread: scene 0 is the slope (faces, 10

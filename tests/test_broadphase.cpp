@@ -204,6 +204,138 @@ TEMPLATE_TEST_CASE("with a solid that holds most of the cloth, the broad phase s
   CHECK(faceContacts > 1000);
 }
 
+/// A cloth settling on a still ball (0.3 m, its box holds most of the cloth) and the floor, beside a still
+/// capsule (its faces come from the bins' lists): the ball's face pass keeps each culled face's clearance between
+/// substeps and passes over the faces still clear. The ball is moved into the cloth by setSolid, and the thickness
+/// changed, midway: the kept clearances must not outlive either.
+template <class S> drape::Solver<S> stillBallScene(bool broadPhase, int threads) {
+  drape::SheetDesc grid;
+  grid.nx = grid.ny = 40;
+  grid.spacing = 0.02;
+  grid.placement.position = {0.003, -0.004, 0.64};
+  drape::Settings settings;
+  settings.broadPhase = broadPhase;
+  settings.threadCount = threads;
+  drape::Solver<S> cloth(std::make_shared<const drape::ClothAsset<S>>(drape::ClothAsset<S>::sheet(grid)), settings);
+  drape::Solid<drape::Plane> floor;
+  floor.staticFriction = floor.dynamicFriction = 0.3;
+  cloth.addSolid(floor);
+  drape::Solid<drape::Sphere> ball;
+  ball.shape.radius = 0.3;
+  ball.pose.position = {0, 0, 0.3};
+  ball.staticFriction = ball.dynamicFriction = 0.3;
+  cloth.addSolid(ball);
+  drape::Solid<drape::Capsule> capsule;
+  capsule.shape = {0.02, 0.1};
+  capsule.pose.position = {0.33, 0.1, 0.05};
+  cloth.addSolid(capsule);
+  return cloth;
+}
+
+TEMPLATE_TEST_CASE("faces kept clear of a still ball between substeps are passed over, bit for bit as without the "
+                   "broad phase, also when the ball moves or the thickness changes",
+                   "[broadphase]", float, double) {
+  using S = TestType;
+  auto plain = stillBallScene<S>(false, 1);
+  auto gridded = stillBallScene<S>(true, 1);
+  auto twoThreads = stillBallScene<S>(true, 2);
+  std::int64_t kept = 0, tested = 0, faceContacts = 0, keptBeforeMove = 0;
+  for (int f = 0; f < 90; ++f) {
+    if (f == 40) {  // the ball moves 1 cm up and 2 cm aside, into the cloth resting on it
+      drape::Solid<drape::Sphere> ball = plain.template solid<drape::Sphere>(0);
+      ball.pose.position += Eigen::Vector3d(0.02, 0, 0.01);
+      for (auto* s : {&plain, &gridded, &twoThreads}) s->setSolid(0, ball);
+      keptBeforeMove = kept;
+    }
+    if (f == 65) {  // a thicker cloth: faces kept clear of the thinner one may now be within the thickness
+      drape::Settings thicker = plain.settings();
+      thicker.thickness = 0.009;
+      for (auto* s : {&plain, &gridded, &twoThreads}) s->setSettings(thicker);
+    }
+    plain.step(1.0 / 60);
+    gridded.step(1.0 / 60, [&](const drape::Solver<S>& s) noexcept {
+      kept += s.stats().facesKeptClear;
+      tested += s.stats().facesTested;
+    });
+    twoThreads.step(1.0 / 60);
+    faceContacts += gridded.stats().faceContacts;
+    REQUIRE(gridded.stats().vertexContacts == plain.stats().vertexContacts);
+    REQUIRE(gridded.stats().faceContacts == plain.stats().faceContacts);
+    REQUIRE(plain.stats().facesKeptClear == 0);
+  }
+  requireSameState(plain, gridded);
+  requireSameState(plain, twoThreads);
+  INFO("faces passed over on kept clearances: " << kept << " of " << tested << " tested");
+  CHECK(faceContacts > 10000);
+  CHECK(keptBeforeMove > 0);
+  CHECK(kept - keptBeforeMove > 0);
+  CHECK(double(kept) > 0.1 * double(tested));
+}
+
+/// A still cloth (no gravity, 11 x 11 vertices 2 cm apart) shaped as a cap 5.5 mm beyond a ball of 0.3 m, so every vertex is clear of the
+/// 5 mm thickness and every face too, though its faces dip up to 0.3 mm below their corners: nothing moves, and
+/// the ball's face pass keeps each face's clearance. `change` then brings the faces near the top within the
+/// thickness, but not their vertices, so only the face pass can see it: 1 moves the ball 0.45 mm up (setSolid),
+/// 2 thickens the cloth to 5.4 mm (setSettings). Returns the face contacts over the substeps of the step after the
+/// change.
+template <class S> std::int64_t faceContactsAfterChange(bool broadPhase, int change) {
+  const double radius = 0.3, gap = 0.0055;
+  const Eigen::Vector3d centre(0.001, -0.002, 0.3);
+  std::vector<drape::Vec3<S>> points;
+  std::vector<std::array<drape::Index, 3>> triangles;
+  constexpr int kSide = 11;
+  for (int j = 0; j < kSide; ++j)
+    for (int i = 0; i < kSide; ++i) {
+      const double x = 0.02 * (i - kSide / 2), y = 0.02 * (j - kSide / 2);
+      const double z = std::sqrt((radius + gap) * (radius + gap) - x * x - y * y);
+      points.push_back((centre + (radius + gap) * Eigen::Vector3d(x, y, z).normalized()).cast<S>());
+    }
+  for (int j = 0; j + 1 < kSide; ++j)
+    for (int i = 0; i + 1 < kSide; ++i) {
+      const drape::Index a = j * kSide + i;
+      triangles.push_back({a, a + 1, a + kSide + 1});
+      triangles.push_back({a, a + kSide + 1, a + kSide});
+    }
+  drape::Settings settings;
+  settings.broadPhase = broadPhase;
+  settings.gravity.setZero();
+  drape::Solver<S> cloth(std::make_shared<const drape::ClothAsset<S>>(drape::ClothAsset<S>::fromMesh(points, triangles)),
+                         settings);
+  drape::Solid<drape::Sphere> ball;
+  ball.shape.radius = radius;
+  ball.pose.position = centre;
+  cloth.addSolid(ball);
+  for (int f = 0; f < 3; ++f) cloth.step(1.0 / 60);
+  REQUIRE(cloth.stats().faceContacts == 0);
+  REQUIRE(cloth.stats().vertexContacts == 0);
+  if (broadPhase) REQUIRE(cloth.stats().facesKeptClear > 0);  // the ball holds the cloth: its faces are kept
+  if (change == 1) {
+    ball.pose.position.z() += 0.00045;
+    cloth.setSolid(0, ball);
+  } else {
+    settings.thickness = 0.0054;
+    cloth.setSettings(settings);
+  }
+  std::int64_t faceContacts = 0, vertexContacts = 0;
+  cloth.step(1.0 / 60, [&](const drape::Solver<S>& s) noexcept {
+    faceContacts += s.stats().faceContacts;
+    vertexContacts += s.stats().vertexContacts;
+  });
+  CHECK(vertexContacts == 0);
+  return faceContacts;
+}
+
+TEMPLATE_TEST_CASE("a face's kept clearance does not outlive a moved solid or a thicker cloth", "[broadphase]", float,
+                   double) {
+  using S = TestType;
+  for (int change : {1, 2}) {
+    INFO("change " << change);
+    const std::int64_t plain = faceContactsAfterChange<S>(false, change);
+    CHECK(plain > 0);
+    CHECK(faceContactsAfterChange<S>(true, change) == plain);
+  }
+}
+
 // Where the build fuses multiply-adds, the vertex pass over the bins' list and the one over every vertex are two
 // copies of one expression that the compiler may fuse differently: the first contact then rounds differently
 // (681 of 720 vertices moved apart by at most 1.0e-7 m, float rounding, at -O3 -march=native), and the rain,

@@ -100,7 +100,7 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
   }
   static void checkSettings(const Settings&) {}  // the CPU runs every valid setting
   template <class Shape> static void checkSolid(const Solid<Shape>&) {}
-  template <class Shape> void solidSet(Index) {}
+  template <class Shape> void solidSet(Index) { passes_.solidsChanged(); }
 
   /// Moves the local origin to follow the cloth, in steps of 1/64 m so the shift is exact in float.
   void beginStep() {

@@ -13,6 +13,8 @@
 
 #include <algorithm>
 #include <array>
+#include <cstdint>
+#include <limits>
 #include <tuple>
 #include <vector>
 
@@ -40,6 +42,14 @@ template <Scalar S> struct PassInputs {
 };
 
 template <Scalar S> class ContactPasses {
+  /// One solid's kept clearances (clearancesFor), with the bins' build, the solids' version and the thickness
+  /// they hold for.
+  struct Clearances {
+    std::vector<S> faces;
+    std::uint64_t builds = 0, solidsVersion = 0;
+    S thickness = 0;
+  };
+
  public:
   /// Sizes the records and the bins for a cloth of `vertexCount` vertices; cells of `cell` metres.
   void setTopology(const std::vector<std::array<Index, 3>>& triangles, Index vertexCount, S cell) {
@@ -59,6 +69,8 @@ template <Scalar S> class ContactPasses {
   }
   /// The positions were replaced: the bins no longer know where the vertices are.
   void positionsReplaced() { binsFresh_ = false; }
+  /// A solid was added or replaced: the faces' kept clearances may belong to another solid now.
+  void solidsChanged() { ++solidsVersion_; }
   /// Whether the velocity update should measure how far the vertices got from where the bins took them.
   bool measuresDrift() const { return useBins_ && binsFresh_; }
   const Vec3<S>* binned() const { return bins_.binned(); }
@@ -76,6 +88,8 @@ template <Scalar S> class ContactPasses {
                   bool rebuild) {
     DRAPE_OMP(single)
     {
+      // The in-solve method's passes rebuild the bins each time, so clearances would never outlive a pass.
+      keepClearances_ = !rebuild;
       contacts_.begin();
       if (useBins_) {
         bins_.noteDrift(moveBound_);  // the prediction's and the solve's moves (updateVelocities)
@@ -116,8 +130,12 @@ template <Scalar S> class ContactPasses {
   template <bool kFaces, bool kCull, bool kMaySweep, class Solids>
   void project(const Solids& compiled, const PassInputs<S>& in, S slack = S(0)) {
     const Index n = Index(contacts_.slotCount.size());
-    std::apply([&](const auto&... lists) { (projectList<kFaces, kCull, kMaySweep>(lists, in, slack, n), ...); },
-               compiled);
+    Index first = 0;  // each solid's place among all the solids, in the order they are visited
+    std::apply(
+        [&](const auto&... lists) {
+          ((projectList<kFaces, kCull, kMaySweep>(lists, in, slack, n, first), first += Index(lists.size())), ...);
+        },
+        compiled);
   }
 
   /// How far a vertex's path this substep can reach relative to a solid: its own travel and the solid's motion
@@ -132,23 +150,47 @@ template <Scalar S> class ContactPasses {
   }
 
   template <bool kFaces, bool kCull, bool kMaySweep, class List>
-  void projectList(const List& list, const PassInputs<S>& in, S slack, Index n) {
-    for (const auto& solid : list) {
+  void projectList(const List& list, const PassInputs<S>& in, S slack, Index n, Index first) {
+    for (std::size_t k = 0; k < list.size(); ++k) {
+      const auto& solid = list[k];
+      const Index place = first + Index(k);
       if constexpr (kMaySweep) {
         const S reach = sweepReach(solid, in);
         if (reach * reach > in.sweep.gate2) {
-          projectSolid<kFaces, kCull, true>(solid, in, slack, n, reach);
+          projectSolid<kFaces, kCull, true>(solid, in, slack, n, reach, place);
           continue;
         }
       }
-      projectSolid<kFaces, kCull, false>(solid, in, slack, n, S(0));
+      projectSolid<kFaces, kCull, false>(solid, in, slack, n, S(0), place);
     }
   }
 
+  /// The faces' kept clearances (KeptClearance) for the solid at `place`, where they can be kept: a solid that
+  /// does not move (no velocity, not a coupled body: its compiled field is the same every substep while the local
+  /// origin stays, and the origin moving rebuilds the bins) and that visits every face. Cleared when the bins are
+  /// rebuilt, a solid is added or replaced or the thickness changes. Null elsewhere. Called by one thread.
+  template <class Solid> Clearances* clearancesFor(const Solid& solid, Index place, const PassInputs<S>& in) {
+    const SolidMotion<S>& m = solid.motion;
+    if (!keepClearances_ || !in.culling || in.keepTurn != nullptr || m.body >= 0 || !m.linearVelocity.isZero(0) ||
+        !m.angularVelocity.isZero(0))
+      return nullptr;
+    if (clearances_.size() <= std::size_t(place)) clearances_.resize(std::size_t(place) + 1);
+    Clearances& c = clearances_[std::size_t(place)];
+    const std::size_t faces = in.triangles.size();
+    if (c.builds != bins_.builds() || c.solidsVersion != solidsVersion_ || c.thickness != in.thickness ||
+        c.faces.size() != faces) {
+      c.faces.assign(faces, -std::numeric_limits<S>::infinity());
+      c.builds = bins_.builds();
+      c.solidsVersion = solidsVersion_;
+      c.thickness = in.thickness;
+    }
+    return &c;
+  }
+
   /// One solid's passes; with kSweep, the broad phase's queries grow by `reach`, the farthest a path can come
-  /// from where it ends.
+  /// from where it ends. `place`: the solid's place among all the solids.
   template <bool kFaces, bool kCull, bool kSweep, class Solid>
-  void projectSolid(const Solid& solid, const PassInputs<S>& in, S slack, Index n, S reach) {
+  void projectSolid(const Solid& solid, const PassInputs<S>& in, S slack, Index n, S reach, Index place) {
     Vec3<S>* x = in.x;
     const S* w = in.invMass;
     const S thickness = in.thickness;
@@ -161,6 +203,7 @@ template <Scalar S> class ContactPasses {
         // face behind its box check: the bins' lists would cost more than they save. Same contacts either way.
         whole_ = 2 * bins_.countNear(solid.boxLow, solid.boxHigh, thickness + reach) >= n;
         if (!whole_) bins_.vertices(x, solid.boxLow, solid.boxHigh, thickness + reach, nearVertices_);
+        kept_ = kFacePass && kCull && whole_ && !kSweep ? clearancesFor(solid, place, in) : nullptr;
       }
       const std::vector<Index>& near = whole_ ? every_ : nearVertices_;
       projectVertices<kSweep>(solid, in, ItemList{near.data()}, whole_ ? n : Index(nearVertices_.size()),
@@ -171,10 +214,12 @@ template <Scalar S> class ContactPasses {
         moveBound_ = 0;
         if constexpr (kFacePass) {
           if (!whole_) bins_.faces(x, solid.boxLow, solid.boxHigh, thickness + reach, nearFaces_);
+          KeptClearance<S> skip;
+          if (kCull && kept_ != nullptr) skip = {kept_->faces.data(), bins_.drift()};
           bins_.noteDrift(projectFaceContacts<kCull, true, kSweep>(
               solid, thickness, in.pgdIterations, in.triangles, ItemList{whole_ ? every_.data() : nearFaces_.data()},
               whole_ ? Index(in.triangles.size()) : Index(nearFaces_.size()), x, w, contacts_, stats_,
-              bins_.binned(), in.exactGridSearch, in.sweep, in.ownNormals, in.keepTurn));
+              bins_.binned(), in.exactGridSearch, in.sweep, in.ownNormals, in.keepTurn, skip));
         }
       }
     } else {
@@ -242,6 +287,10 @@ template <Scalar S> class ContactPasses {
 
   ContactBuffer<S> contacts_;
   CollisionStats stats_;
+  std::vector<Clearances> clearances_;  ///< by the solid's place among all the solids
+  std::uint64_t solidsVersion_ = 0;
+  bool keepClearances_ = false;  ///< this substep's passes may keep clearances (shared by the team)
+  Clearances* kept_ = nullptr;   ///< the current solid's, or null (shared by the team)
   VertexBins<S> bins_;
   std::vector<Index> nearVertices_, nearFaces_;  ///< what the bins found near the current solid
   std::vector<Index> every_;  ///< 0, 1, 2, ...: every vertex and face, for a solid that holds most of the cloth

@@ -12,6 +12,11 @@
 
 namespace drape {
 
+/// A culled face's clearance (queryFace) is shortened by this share of the lengths it was computed from, so that
+/// rounding cannot let a face skip a search that would have found it in contact. CPU only: the GPU's face pass
+/// keeps nothing between substeps.
+inline constexpr double kClearanceSlack = 1e-5;
+
 /// Where a face is deepest in a solid.
 template <Scalar S> struct FaceQuery {
   Vec3<S> barycentric;  ///< b, on the simplex
@@ -235,9 +240,16 @@ template <class Field> constexpr double lipschitzOf() {
 /// kGridSearchBudget cell reads rather than maxIterations, unless exactSearch is false: Settings::exactGridSearch),
 /// the descent otherwise.
 /// Returns false when culled. Shared by the solver's face pass and the penetration metric.
-template <bool kCull, Scalar S, class Field>
+///
+/// With kClearance, a culled face also states by how much: `clearance` is a distance that every point of the face
+/// may move by without coming within `margin` of the solid, less a rounding slack (kClearanceSlack of the
+/// scales involved); 0 where the face was not culled. The face pass keeps it between substeps (FaceSkip).
+template <bool kCull, bool kClearance = false, Scalar S, class Field>
 bool queryFace(const Field& sdf, const Vec3<S>& x0, const Vec3<S>& x1, const Vec3<S>& x2, S margin,
-               int maxIterations, FaceQuery<S>& q, bool exactSearch = true) {
+               int maxIterations, FaceQuery<S>& q, bool exactSearch = true,
+               [[maybe_unused]] S* clearance = nullptr) {
+  static_assert(kCull || !kClearance, "only a culled face has a clearance");
+  if constexpr (kClearance) *clearance = S(0);
   if constexpr (requires { Field::kPointCore; }) {
     // The distance to a point less a radius (a ball) is deepest where the face is nearest that point: found in
     // closed form, exact to rounding, where cutting planes close in on a curved field one cut at a time. The
@@ -252,13 +264,23 @@ bool queryFace(const Field& sdf, const Vec3<S>& x0, const Vec3<S>& x1, const Vec
                                  (x2 - sdf.centre).squaredNorm()});
       const S edge = std::max({(x1 - x0).squaredNorm(), (x2 - x1).squaredNorm(), (x0 - x2).squaredNorm()});
       const S clear = reach * S(1 + constants::kCornerCullSlack);
-      if (S(3) * (corner - clear * clear) > edge) return false;  // no division: its latency was the test's cost
+      if (S(3) * (corner - clear * clear) > edge) {  // no division: its latency was the test's cost
+        if constexpr (kClearance)
+          *clearance = std::sqrt(corner - edge / S(3)) - reach -
+                       S(kClearanceSlack) * (reach + sdf.centre.cwiseAbs().maxCoeff());
+        return false;
+      }
     }
     Vec3<S> b;
     if (nearestOnTriangle<S>(sdf.centre, x0, x1, x2, b)) {
       const Vec3<S> p = x0 + b[1] * (x1 - x0) + b[2] * (x2 - x0);
       // The rest are told by the squared distance, without a root or a division.
-      if (kCull && (p - sdf.centre).squaredNorm() > reach * reach) return false;
+      if (kCull && (p - sdf.centre).squaredNorm() > reach * reach) {
+        if constexpr (kClearance)
+          *clearance = (p - sdf.centre).norm() - reach -
+                       S(kClearanceSlack) * (reach + sdf.centre.cwiseAbs().maxCoeff());
+        return false;
+      }
       Vec3<S> n;
       const S phi = sdf(p, n);
       q = {b, p, n, phi, 1};
@@ -268,12 +290,28 @@ bool queryFace(const Field& sdf, const Vec3<S>& x0, const Vec3<S>& x1, const Vec
   const FaceSphere<S> sphere = faceSphere<S>(x0, x1, x2);
   if constexpr (kCull && requires { sdf.lowerBound(sphere.centre); }) {
     // A field with a cheap lower bound culls with it first: where the bound clears the sphere, phi does too.
-    if (sdf.lowerBound(sphere.centre) > sphere.radius + margin) return false;
+    const S bound = sdf.lowerBound(sphere.centre);
+    if (bound > sphere.radius + margin) {
+      // The bound (a largest plane distance) is 1-Lipschitz, as the field is.
+      if constexpr (kClearance)
+        *clearance = bound - sphere.radius - margin -
+                     S(kClearanceSlack) * (sphere.centre.cwiseAbs().maxCoeff() + sphere.radius +
+                                                      std::abs(bound) + margin);
+      return false;
+    }
   }
   Vec3<S> gradC;
   const S phiC = sdf(sphere.centre, gradC);
   // A field steeper than a true distance (a grid's) states how much: the sphere test scales by it.
-  if (kCull && phiC > S(lipschitzOf<Field>()) * sphere.radius + margin) return false;
+  constexpr S kLipschitz = S(lipschitzOf<Field>());
+  if (kCull && phiC > kLipschitz * sphere.radius + margin) {
+    // A move by d changes phi by at most the Lipschitz constant times d.
+    if constexpr (kClearance)
+      *clearance = (phiC - kLipschitz * sphere.radius - margin) / kLipschitz -
+                   S(kClearanceSlack) * (sphere.centre.cwiseAbs().maxCoeff() + sphere.radius +
+                                                    std::abs(phiC) + margin);
+    return false;
+  }
   // With culling, the search's own bounds cull too.
   const S floor = kCull ? margin : std::numeric_limits<S>::infinity();
   if constexpr (Field::kConvex)

@@ -223,6 +223,7 @@ template <Scalar S> struct ContactBuffer {
 struct CollisionStats {
   std::int64_t facesTested = 0;   ///< face-solid pairs considered
   std::int64_t facesCulled = 0;   ///< of those, rejected by their bounding boxes or spheres
+  std::int64_t facesKeptClear = 0;  ///< of those, passed over on a clearance kept from an earlier substep (KeptClearance)
   std::int64_t faceContacts = 0;  ///< face-solid pairs whose deepest point was within the thickness
   std::int64_t vertexContacts = 0;
   std::int64_t sdfEvaluations = 0;
@@ -230,6 +231,14 @@ struct CollisionStats {
   std::int64_t faceSweeps = 0;    ///< face paths searched by continuous contact
   std::int64_t sweepContacts = 0;  ///< of those paths, the ones that came within the thickness on the way
   std::int64_t frictionGuarded = 0;  ///< faces whose corners the friction guard put back (guardFriction)
+
+  CollisionStats& operator+=(const CollisionStats& o) {
+    facesTested += o.facesTested, facesCulled += o.facesCulled, facesKeptClear += o.facesKeptClear;
+    faceContacts += o.faceContacts, vertexContacts += o.vertexContacts, sdfEvaluations += o.sdfEvaluations;
+    vertexSweeps += o.vertexSweeps, faceSweeps += o.faceSweeps, sweepContacts += o.sweepContacts;
+    frictionGuarded += o.frictionGuarded;
+    return *this;
+  }
 };
 
 /// What continuous contact reads (docs/design.md §18): where each vertex started the substep, the substep, and
@@ -243,6 +252,16 @@ template <Scalar S> struct SweepInputs {
   DRAPE_ALWAYS_INLINE Vec3<S> startOf(Index i, const SolidMotion<S>& m) const {
     return start[i] + h * m.velocityAt(start[i]);
   }
+};
+
+/// What the face pass keeps between substeps for a solid that does not move and meets most of the cloth
+/// (ContactPasses, docs/design.md §3 "Clearances kept between substeps"): for each face, how far its vertices may
+/// move from where the bins took them before the face can come within the thickness, as its last test showed.
+/// Every vertex lies within `drift` of its binned position when the pass starts (the bins' drift), so a face
+/// whose clearance exceeds that is still culled, and the pass passes over it without a test.
+template <Scalar S> struct KeptClearance {
+  S* clear = nullptr;  ///< by face index; -infinity where the face was not culled or not yet tested
+  S drift = 0;
 };
 
 /// With Settings::keepAngularMomentum (docs/design.md §4): a contact moved a vertex from `before` to `after`, out
@@ -544,17 +563,36 @@ VertexPassShare<S> projectVertexContacts(Index begin, Index end, const CompiledS
 /// smooth field, Settings::keepAngularMomentum), each corner's record takes the field's normal at the corner, and
 /// where `keepTurn` is given (the velocities, after the update), a moved corner's velocity keeps its moment about
 /// the centre of curvature (keepTurnAbout).
-template <bool kCull, bool kBody, bool kBoxed, bool kSweep, bool kOwnNormals = false, class Shape, Scalar S,
-          class Ids>
+///
+/// With kSkip (a solid that does not move, with the bins on), a face whose kept clearance exceeds how far any
+/// vertex may be from its binned position is passed over, and every culled face's clearance is kept (KeptClearance).
+/// The bound grows with the pass's own moves, so the contacts are bit for bit those of the pass without it.
+template <bool kCull, bool kBody, bool kBoxed, bool kSweep, bool kOwnNormals = false, bool kSkip = false,
+          class Shape, Scalar S, class Ids>
 S projectFaceContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, int pgdIterations,
                         const std::vector<std::array<Index, 3>>& triangles, Ids ids, Index count, Vec3<S>* x,
                         const S* invMass, ContactBuffer<S>& contacts, CollisionStats& stats, const Vec3<S>* binned,
-                        bool exactSearch, const SweepInputs<S>& sweep, [[maybe_unused]] Vec3<S>* keepTurn = nullptr) {
+                        bool exactSearch, const SweepInputs<S>& sweep, [[maybe_unused]] Vec3<S>* keepTurn = nullptr,
+                        [[maybe_unused]] KeptClearance<S> skip = {}) {
+  static_assert(!kSkip || (kCull && kBoxed && !kSweep && !kBody), "a kept clearance is a cull's, on a still solid");
   S moved = 0;
+  CollisionStats counts;  // kept apart from `stats`, which the moves below may alias
   [[maybe_unused]] const Vec3<S> boxLow = solid.boxLow.array() - thickness;
   [[maybe_unused]] const Vec3<S> boxHigh = solid.boxHigh.array() + thickness;
+  // kSkip: how far any vertex may now be from its binned position (the drift, grown by this pass's moves), and
+  // the rounding slack of a clearance read off the box check.
+  [[maybe_unused]] S reached = skip.drift;
+  [[maybe_unused]] const S boxSlack =
+      S(kClearanceSlack) * std::max(boxLow.cwiseAbs().maxCoeff(), boxHigh.cwiseAbs().maxCoeff());
   for (Index f = 0; f < count; ++f) {
     const auto& t = triangles[std::size_t(ids[f])];
+    if constexpr (kSkip) {
+      if (skip.clear[ids[f]] > reached) {
+        ++counts.facesCulled;
+        ++counts.facesKeptClear;
+        continue;
+      }
+    }
     if constexpr (kSweep) {
       // Continuous contact: a face whose corners travelled further than the gate relative to the solid is
       // searched along its path first (sweepFace).
@@ -572,7 +610,7 @@ S projectFaceContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, int p
           near = (high.array() >= boxLow.array()).all() && (low.array() <= boxHigh.array()).all();
         }
         if (near) {
-          ++stats.faceSweeps;
+          ++counts.faceSweeps;
           FaceQuery<S> hit;
           int evaluations = 0;
           S when = 0;
@@ -591,9 +629,9 @@ S projectFaceContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, int p
               moved = std::max(moved, (x[t[k]] - binned[t[k]]).squaredNorm());
               any = true;
             }
-            stats.sweepContacts += any;
+            counts.sweepContacts += any;
           }
-          stats.sdfEvaluations += evaluations;
+          counts.sdfEvaluations += evaluations;
         }
       }
     }
@@ -601,26 +639,34 @@ S projectFaceContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, int p
       const Vec3<S> faceLow = x[t[0]].cwiseMin(x[t[1]]).cwiseMin(x[t[2]]);
       const Vec3<S> faceHigh = x[t[0]].cwiseMax(x[t[1]]).cwiseMax(x[t[2]]);
       if (!((faceHigh.array() >= boxLow.array()).all() && (faceLow.array() <= boxHigh.array()).all())) {
-        ++stats.facesCulled;
+        // Moved by less than the widest gap along an axis, the face's box still misses the grown one.
+        if constexpr (kSkip)
+          skip.clear[ids[f]] = std::max((boxLow - faceHigh).maxCoeff(), (faceLow - boxHigh).maxCoeff()) -
+                               boxSlack - reached;
+        ++counts.facesCulled;
         continue;
       }
     }
     FaceQuery<S> q;
-    if (!queryFace<kCull>(solid.sdf, x[t[0]], x[t[1]], x[t[2]], thickness, pgdIterations, q, exactSearch)) {
-      ++stats.facesCulled;
-      ++stats.sdfEvaluations;
+    [[maybe_unused]] S clearance = 0;
+    if (!queryFace<kCull, kSkip>(solid.sdf, x[t[0]], x[t[1]], x[t[2]], thickness, pgdIterations, q, exactSearch,
+                                 &clearance)) {
+      if constexpr (kSkip) skip.clear[ids[f]] = clearance - reached;
+      ++counts.facesCulled;
+      ++counts.sdfEvaluations;
       continue;
     }
-    stats.sdfEvaluations += q.evaluations;
+    if constexpr (kSkip) skip.clear[ids[f]] = -std::numeric_limits<S>::infinity();
+    counts.sdfEvaluations += q.evaluations;
     if (q.phi >= thickness) continue;
     const Vec3<S> wb(invMass[t[0]] * q.barycentric[0], invMass[t[1]] * q.barycentric[1],
                      invMass[t[2]] * q.barycentric[2]);
     const S denom = wb.dot(q.barycentric);
     if (denom <= S(0)) continue;
-    ++stats.faceContacts;
+    ++counts.faceContacts;
     int extra = 0;
     S depth = featureAlignedPush(solid.sdf, x[t[0]], x[t[1]], x[t[2]], thickness, thickness - q.phi, q, extra);
-    stats.sdfEvaluations += extra;
+    counts.sdfEvaluations += extra;
     // Corner k moves wb_k / denom times the depth: unbounded where the free corners carry little of the deepest
     // point (a body pressing a hammock beside its pinned border threw the next row 0.6 m in one substep). Capped
     // at kFaceMoveCap times the depth, the point is cleared over several substeps instead.
@@ -631,23 +677,28 @@ S projectFaceContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, int p
       if (wb[k] <= S(0)) continue;
       const S dn = wb[k] / denom * depth;
       [[maybe_unused]] const Vec3<S> before = x[t[k]];
-      x[t[k]] += dn * q.normal;
+      // Moved in a local and stored whole: read back from memory right after a store of its parts, the
+      // position cost a store-forwarding stall per corner.
+      const Vec3<S> p = x[t[k]] + dn * q.normal;
+      x[t[k]] = p;
       Vec3<S> n = q.normal, anchor = placed;
       if constexpr (kOwnNormals) {
         // On a smooth field each corner answers along its own normal, whose line meets the ball's centre or
         // the capsule's axis as the push's does: the face's normal at its corners turns the cloth about them
         // (docs/design.md §4). A corner beyond a thin capsule, facing the other way, keeps the face's.
         Vec3<S> g;
-        const S phi = solid.sdf(x[t[k]], g);
-        if (g.dot(q.normal) >= S(constants::kMergeCos)) n = g, anchor = x[t[k]] - phi * g;
-        if (keepTurn != nullptr) keepTurnAbout(solid.sdf, solid.motion, before, x[t[k]], keepTurn[t[k]]);
+        const S phi = solid.sdf(p, g);
+        if (g.dot(q.normal) >= S(constants::kMergeCos)) n = g, anchor = p - phi * g;
+        if (keepTurn != nullptr) keepTurnAbout(solid.sdf, solid.motion, before, p, keepTurn[t[k]]);
       }
-      contacts.template record<kBody>(t[k], x[t[k]], n, dn, solid.motion, anchor,
-                                      solid.motion.contactVelocityAt(x[t[k]], n, anchor));
-      moved = std::max(moved, (x[t[k]] - binned[t[k]]).squaredNorm());
+      contacts.template record<kBody>(t[k], p, n, dn, solid.motion, anchor,
+                                      solid.motion.contactVelocityAt(p, n, anchor));
+      moved = std::max(moved, (p - binned[t[k]]).squaredNorm());
     }
+    if constexpr (kSkip) reached = std::max(skip.drift, std::sqrt(moved));
   }
-  stats.facesTested += count;
+  counts.facesTested += count;
+  stats += counts;
   return std::sqrt(moved);
 }
 template <bool kCull, bool kBoxed = false, bool kSweep = false, class Shape, Scalar S, class Ids>
@@ -655,8 +706,14 @@ S projectFaceContacts(const CompiledSolid<Shape, S>& solid, S thickness, int pgd
                       const std::vector<std::array<Index, 3>>& triangles, Ids ids, Index count, Vec3<S>* x,
                       const S* invMass, ContactBuffer<S>& contacts, CollisionStats& stats, const Vec3<S>* binned,
                       bool exactSearch = true, const SweepInputs<S>& sweep = {}, bool ownNormals = false,
-                      Vec3<S>* keepTurn = nullptr) {
+                      Vec3<S>* keepTurn = nullptr, KeptClearance<S> skip = {}) {
   const bool body = solid.motion.body >= 0;
+  if constexpr (kCull && kBoxed && !kSweep) {
+    if (skip.clear != nullptr && !body && !ownNormals)
+      return projectFaceContactsAs<kCull, false, kBoxed, kSweep, false, true>(
+          solid, thickness, pgdIterations, triangles, ids, count, x, invMass, contacts, stats, binned, exactSearch,
+          sweep, keepTurn, skip);
+  }
   if constexpr (kSmoothField<Shape, S>) {
     if (ownNormals && !body)
       return projectFaceContactsAs<kCull, false, kBoxed, kSweep, true>(solid, thickness, pgdIterations, triangles,
