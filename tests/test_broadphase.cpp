@@ -272,12 +272,12 @@ TEMPLATE_TEST_CASE("faces kept clear of a still ball between substeps are passed
   CHECK(double(kept) > 0.1 * double(tested));
 }
 
-/// A still cloth (no gravity, 11 x 11 vertices 2 cm apart) shaped as a cap 5.5 mm beyond a ball of 0.3 m, so every vertex is clear of the
-/// 5 mm thickness and every face too, though its faces dip up to 0.3 mm below their corners: nothing moves, and
-/// the ball's face pass keeps each face's clearance. `change` then brings the faces near the top within the
-/// thickness, but not their vertices, so only the face pass can see it: 1 moves the ball 0.45 mm up (setSolid),
-/// 2 thickens the cloth to 5.4 mm (setSettings). Returns the face contacts over the substeps of the step after the
-/// change.
+/// A still cloth (no gravity, 11 x 11 vertices 2 cm apart) shaped as a cap 5.5 mm beyond a ball of 0.3 m, so
+/// every vertex is clear of the 5 mm thickness and every face too, though its faces dip up to 0.3 mm below their
+/// corners: nothing moves, and the ball's face pass keeps each face's clearance. `change` then brings the faces
+/// near the top within the thickness, but not their vertices, so only the face pass can see it: 1 moves the ball
+/// 0.45 mm up (setSolid), 2 thickens the cloth to 5.4 mm (setSettings). Returns the face contacts over the
+/// substeps of the step after the change.
 template <class S> std::int64_t faceContactsAfterChange(bool broadPhase, int change) {
   const double radius = 0.3, gap = 0.0055;
   const Eigen::Vector3d centre(0.001, -0.002, 0.3);
@@ -299,8 +299,8 @@ template <class S> std::int64_t faceContactsAfterChange(bool broadPhase, int cha
   drape::Settings settings;
   settings.broadPhase = broadPhase;
   settings.gravity.setZero();
-  drape::Solver<S> cloth(std::make_shared<const drape::ClothAsset<S>>(drape::ClothAsset<S>::fromMesh(points, triangles)),
-                         settings);
+  const auto asset = std::make_shared<const drape::ClothAsset<S>>(drape::ClothAsset<S>::fromMesh(points, triangles));
+  drape::Solver<S> cloth(asset, settings);
   drape::Solid<drape::Sphere> ball;
   ball.shape.radius = radius;
   ball.pose.position = centre;

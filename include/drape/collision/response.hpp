@@ -223,7 +223,7 @@ template <Scalar S> struct ContactBuffer {
 struct CollisionStats {
   std::int64_t facesTested = 0;   ///< face-solid pairs considered
   std::int64_t facesCulled = 0;   ///< of those, rejected by their bounding boxes or spheres
-  std::int64_t facesKeptClear = 0;  ///< of those, passed over on a clearance kept from an earlier substep (KeptClearance)
+  std::int64_t facesKeptClear = 0;  ///< of those, passed over on a clearance kept from an earlier substep
   std::int64_t faceContacts = 0;  ///< face-solid pairs whose deepest point was within the thickness
   std::int64_t vertexContacts = 0;
   std::int64_t sdfEvaluations = 0;
@@ -255,7 +255,7 @@ template <Scalar S> struct SweepInputs {
 };
 
 /// What the face pass keeps between substeps for a solid that does not move and meets most of the cloth
-/// (ContactPasses, docs/design.md §3 "Clearances kept between substeps"): for each face, how far its vertices may
+/// (ContactPasses, docs/design.md §13 "Clearances kept between substeps"): for each face, how far its vertices may
 /// move from where the bins took them before the face can come within the thickness, as its last test showed.
 /// Every vertex lies within `drift` of its binned position when the pass starts (the bins' drift), so a face
 /// whose clearance exceeds that is still culled, and the pass passes over it without a test.
