@@ -243,7 +243,7 @@ template <class Field> constexpr double lipschitzOf() {
 ///
 /// With kClearance, a culled face also states by how much: `clearance` is a distance that every point of the face
 /// may move by without coming within `margin` of the solid, less a rounding slack (kClearanceSlack of the
-/// scales involved); 0 where the face was not culled. The face pass keeps it between substeps (FaceSkip).
+/// scales involved); 0 where the face was not culled. The face pass keeps it between substeps (KeptClearance).
 template <bool kCull, bool kClearance = false, Scalar S, class Field>
 bool queryFace(const Field& sdf, const Vec3<S>& x0, const Vec3<S>& x1, const Vec3<S>& x2, S margin,
                int maxIterations, FaceQuery<S>& q, bool exactSearch = true,
@@ -295,8 +295,8 @@ bool queryFace(const Field& sdf, const Vec3<S>& x0, const Vec3<S>& x1, const Vec
       // The bound (a largest plane distance) is 1-Lipschitz, as the field is.
       if constexpr (kClearance)
         *clearance = bound - sphere.radius - margin -
-                     S(kClearanceSlack) * (sphere.centre.cwiseAbs().maxCoeff() + sphere.radius +
-                                                      std::abs(bound) + margin);
+                     S(kClearanceSlack) *
+                         (sphere.centre.cwiseAbs().maxCoeff() + sphere.radius + std::abs(bound) + margin);
       return false;
     }
   }
@@ -308,8 +308,8 @@ bool queryFace(const Field& sdf, const Vec3<S>& x0, const Vec3<S>& x1, const Vec
     // A move by d changes phi by at most the Lipschitz constant times d.
     if constexpr (kClearance)
       *clearance = (phiC - kLipschitz * sphere.radius - margin) / kLipschitz -
-                   S(kClearanceSlack) * (sphere.centre.cwiseAbs().maxCoeff() + sphere.radius +
-                                                    std::abs(phiC) + margin);
+                   S(kClearanceSlack) *
+                       (sphere.centre.cwiseAbs().maxCoeff() + sphere.radius + std::abs(phiC) + margin);
     return false;
   }
   // With culling, the search's own bounds cull too.
