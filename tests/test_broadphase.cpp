@@ -23,22 +23,29 @@ template <class S> bool inGrownBox(const drape::Vec3<S>& p, const drape::Vec3<S>
   return (p.array() >= lo.array() - m).all() && (p.array() <= hi.array() + m).all();
 }
 
-/// A 40 x 40 cloth falling onto a floor and five bounded solids of every convex kind, one of them a box
-/// sweeping sideways through the cloth at 3 m/s (it drags vertices far from where they were binned).
-/// With `draped`, a large ball rising under the cloth comes first among the bounded solids: its box holds most of
-/// the cloth, so its passes visit every vertex and face, and the solids after it read the bins it moved vertices in.
-template <class S> drape::Solver<S> crowdedScene(bool broadPhase, int threads, bool draped = false) {
+/// A 40 x 40 cloth (2 cm) placed at `at`, over the floor (friction `mu`), with the bins on or off.
+template <class S>
+drape::Solver<S> sheetOverFloor(const Eigen::Vector3d& at, double mu, bool broadPhase, int threads) {
   drape::SheetDesc grid;
   grid.nx = grid.ny = 40;
   grid.spacing = 0.02;
-  grid.placement.position = {0.001, -0.002, 0.25};
+  grid.placement.position = at;
   drape::Settings settings;
   settings.broadPhase = broadPhase;
   settings.threadCount = threads;
   drape::Solver<S> cloth(std::make_shared<const drape::ClothAsset<S>>(drape::ClothAsset<S>::sheet(grid)), settings);
   drape::Solid<drape::Plane> floor;
-  floor.staticFriction = floor.dynamicFriction = 0.4;
+  floor.staticFriction = floor.dynamicFriction = mu;
   cloth.addSolid(floor);
+  return cloth;
+}
+
+/// A 40 x 40 cloth falling onto a floor and five bounded solids of every convex kind, one of them a box
+/// sweeping sideways through the cloth at 3 m/s (it drags vertices far from where they were binned).
+/// With `draped`, a large ball rising under the cloth comes first among the bounded solids: its box holds most of
+/// the cloth, so its passes visit every vertex and face, and the solids after it read the bins it moved vertices in.
+template <class S> drape::Solver<S> crowdedScene(bool broadPhase, int threads, bool draped = false) {
+  drape::Solver<S> cloth = sheetOverFloor<S>({0.001, -0.002, 0.25}, 0.4, broadPhase, threads);
   if (draped) {
     drape::Solid<drape::Sphere> dome;
     dome.shape.radius = 0.3;
@@ -209,17 +216,7 @@ TEMPLATE_TEST_CASE("with a solid that holds most of the cloth, the broad phase s
 /// substeps and passes over the faces still clear. The ball is moved into the cloth by setSolid, and the thickness
 /// changed, midway: the kept clearances must not outlive either.
 template <class S> drape::Solver<S> stillBallScene(bool broadPhase, int threads) {
-  drape::SheetDesc grid;
-  grid.nx = grid.ny = 40;
-  grid.spacing = 0.02;
-  grid.placement.position = {0.003, -0.004, 0.64};
-  drape::Settings settings;
-  settings.broadPhase = broadPhase;
-  settings.threadCount = threads;
-  drape::Solver<S> cloth(std::make_shared<const drape::ClothAsset<S>>(drape::ClothAsset<S>::sheet(grid)), settings);
-  drape::Solid<drape::Plane> floor;
-  floor.staticFriction = floor.dynamicFriction = 0.3;
-  cloth.addSolid(floor);
+  drape::Solver<S> cloth = sheetOverFloor<S>({0.003, -0.004, 0.64}, 0.3, broadPhase, threads);
   drape::Solid<drape::Sphere> ball;
   ball.shape.radius = 0.3;
   ball.pose.position = {0, 0, 0.3};

@@ -171,7 +171,7 @@ template <Scalar S> class ContactPasses {
   /// rebuilt, a solid is added or replaced or the thickness changes. Null elsewhere. Called by one thread.
   template <class Solid> Clearances* clearancesFor(const Solid& solid, Index place, const PassInputs<S>& in) {
     const SolidMotion<S>& m = solid.motion;
-    if (!keepClearances_ || !in.culling || in.keepTurn != nullptr || m.body >= 0 || !m.linearVelocity.isZero(0) ||
+    if (!keepClearances_ || in.keepTurn != nullptr || m.body >= 0 || !m.linearVelocity.isZero(0) ||
         !m.angularVelocity.isZero(0))
       return nullptr;
     if (clearances_.size() <= std::size_t(place)) clearances_.resize(std::size_t(place) + 1);
@@ -215,7 +215,7 @@ template <Scalar S> class ContactPasses {
         if constexpr (kFacePass) {
           if (!whole_) bins_.faces(x, solid.boxLow, solid.boxHigh, thickness + reach, nearFaces_);
           KeptClearance<S> skip;
-          if (kCull && kept_ != nullptr) skip = {kept_->faces.data(), bins_.drift()};
+          if (kept_ != nullptr) skip = {kept_->faces.data(), bins_.drift()};
           bins_.noteDrift(projectFaceContacts<kCull, true, kSweep>(
               solid, thickness, in.pgdIterations, in.triangles, ItemList{whole_ ? every_.data() : nearFaces_.data()},
               whole_ ? Index(in.triangles.size()) : Index(nearFaces_.size()), x, w, contacts_, stats_,
