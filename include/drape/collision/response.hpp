@@ -672,14 +672,14 @@ S projectFaceContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, int p
     // at kFaceMoveCap times the depth, the point is cleared over several substeps instead.
     const S most = std::max({wb[0], wb[1], wb[2]}) / denom;
     if (most > S(constants::kFaceMoveCap)) depth *= S(constants::kFaceMoveCap) / most;
-    const Vec3<S> placed = q.point + depth * q.normal;  // the moves below carry the deepest point there
+    const Vec3<S> placed = movedAlong(q.point, depth, q.normal);  // the moves below carry the deepest point there
     for (int k = 0; k < 3; ++k) {
       if (wb[k] <= S(0)) continue;
       const S dn = wb[k] / denom * depth;
       [[maybe_unused]] const Vec3<S> before = x[t[k]];
       // Moved in a local and stored whole: read back from memory right after a store of its parts, the
       // position cost a store-forwarding stall per corner.
-      const Vec3<S> p = x[t[k]] + dn * q.normal;
+      const Vec3<S> p = movedAlong(x[t[k]], dn, q.normal);
       x[t[k]] = p;
       Vec3<S> n = q.normal, anchor = placed;
       if constexpr (kOwnNormals) {

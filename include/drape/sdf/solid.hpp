@@ -68,7 +68,7 @@ template <Scalar S> struct SolidMotion {
   /// velocity has a normal part its surface does not have, and removing it would turn a frictionless cloth with
   /// the solid (docs/design.md §4). A vertex contact's anchor is the vertex, where this is velocityAt(x).
   DRAPE_ALWAYS_INLINE Vec3<S> contactVelocityAt(const Vec3<S>& x, const Vec3<S>& n, const Vec3<S>& anchor) const {
-    return velocityAt(x) + n.dot(spin(anchor - x)) * n;
+    return movedAlong(velocityAt(x), n.dot(spin(anchor - x)), n);
   }
   /// w x d: how much faster the solid's material moves at a point d further on.
   DRAPE_ALWAYS_INLINE Vec3<S> spin(const Vec3<S>& d) const {
