@@ -3,6 +3,7 @@
 // barycentric simplex (in place of the projected gradient descent of the SDF collision paper, Fig 1); on a ball,
 // the face's point nearest the centre in closed form.
 
+#include <drape/detail/parallel.hpp>
 #include <drape/detail/triangle.hpp>
 #include <drape/kernel_constants.hpp>
 #include <drape/math.hpp>
@@ -43,9 +44,11 @@ template <Scalar S> Vec3<S> projectToSimplex(const Vec3<S>& y) {
 /// The point of the triangle (x0, x1, x2) nearest to p, as barycentric weights (detail::nearestRegion). False
 /// for a flat triangle, which the caller searches otherwise: on a triangle with no area the Voronoi regions
 /// overlap, and rounding picked the wrong edge, a point 1 mm from the nearest, where the build fuses
-/// multiply-adds.
+/// multiply-adds. Inlined, with queryFace, into the face pass: called, its weights went back through memory and
+/// were read back at once, wider than they were stored (a store-forwarding stall per face on a ball).
 template <Scalar S>
-bool nearestOnTriangle(const Vec3<S>& p, const Vec3<S>& x0, const Vec3<S>& x1, const Vec3<S>& x2, Vec3<S>& b) {
+DRAPE_ALWAYS_INLINE bool nearestOnTriangle(const Vec3<S>& p, const Vec3<S>& x0, const Vec3<S>& x1,
+                                           const Vec3<S>& x2, Vec3<S>& b) {
   using F = detail::TriangleFeature;
   const Vec3<S> e1 = x1 - x0, e2 = x2 - x0;
   if (!(e1.cross(e2).squaredNorm() > S(constants::kFlatSine2) * e1.squaredNorm() * e2.squaredNorm())) return false;
@@ -103,8 +106,8 @@ template <Scalar S> FaceSphere<S> faceSphere(const Vec3<S>& x0, const Vec3<S>& x
 ///
 /// The same bound culls: once the certified minimum is clearly above `floor` (the contact margin), no point of
 /// the face is within it and the search stops, returning its best point so far (whose phi is then above the
-/// floor too). The default, infinity, never stops early. Near a solid most faces that pass the bounding-sphere cull are settled so by the centroid's
-/// own tangent plane, without another evaluation.
+/// floor too). The default, infinity, never stops early. Near a solid most faces that pass the bounding-sphere
+/// cull are settled so by the centroid's own tangent plane, without another evaluation.
 template <Scalar S, class Field>
 FaceQuery<S> deepestPointOnFace(const Field& sdf, const Vec3<S>& x0, const Vec3<S>& x1, const Vec3<S>& x2,
                                 const Vec3<S>& centroid, S phiC, const Vec3<S>& gradC, int maxIterations,
@@ -245,9 +248,9 @@ template <class Field> constexpr double lipschitzOf() {
 /// may move by without coming within `margin` of the solid, less a rounding slack (kClearanceSlack of the
 /// scales involved); 0 where the face was not culled. The face pass keeps it between substeps (KeptClearance).
 template <bool kCull, bool kClearance = false, Scalar S, class Field>
-bool queryFace(const Field& sdf, const Vec3<S>& x0, const Vec3<S>& x1, const Vec3<S>& x2, S margin,
-               int maxIterations, FaceQuery<S>& q, bool exactSearch = true,
-               [[maybe_unused]] S* clearance = nullptr) {
+DRAPE_ALWAYS_INLINE bool queryFace(const Field& sdf, const Vec3<S>& x0, const Vec3<S>& x1, const Vec3<S>& x2,
+                                   S margin, int maxIterations, FaceQuery<S>& q, bool exactSearch = true,
+                                   [[maybe_unused]] S* clearance = nullptr) {
   static_assert(kCull || !kClearance, "only a culled face has a clearance");
   if constexpr (kClearance) *clearance = S(0);
   if constexpr (requires { Field::kPointCore; }) {
