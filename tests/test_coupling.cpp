@@ -596,6 +596,25 @@ TEST_CASE("the sheet-crossing meter counts a body through the cloth, and not one
     CHECK(meter.crossings() == 0);
     CHECK(meter.bodiesThrough() == 0);
   }
+  SECTION("under a fold whose two layers cross, the nearest point passing from one to the other: none") {
+    // Folded back along its middle into two layers over the ball (the solver has no cloth-cloth contact, so they
+    // may cross): the first at z = 0.04 for x from -0.1 to 0.1, the second, upside down, from the fold at x = 0.1
+    // back to x = -0.1, crossing the first at x = 0. Under x < 0 the second is the nearer, under x > 0 the first,
+    // and the two give a point under both opposite sides.
+    for (std::size_t i = 0; i < sheet.x.size(); ++i) {
+      const Eigen::Vector3d r = asset.origin + asset.restPositions[i];  // x and y in [-0.1, 0.1]
+      const double x = r.x() <= 0 ? 2 * r.x() + 0.1 : 0.1 - 2 * r.x();
+      const double z = r.x() <= 0 ? 0.04 : 0.04 + 0.5 * (0.1 - x) * x;
+      sheet.x[i] = {x, r.y(), z};
+    }
+    drape::scenes::SheetCrossings meter(asset);
+    walk(meter, {-0.03, 0.005, 0.01}, {0.03, 0.005, 0.01});  // along under both layers and back
+    walk(meter, {0.03, 0.005, 0.01}, {-0.03, 0.005, 0.01});
+    CHECK(meter.crossings() == 0);  // 2 without the rule for a face that still has the body on its old side
+    // Up through the lower layer alone, into the gap between the two: one crossing.
+    walk(meter, {-0.05, 0.005, 0.01}, {-0.05, 0.005, 0.0375});
+    CHECK(meter.crossings() == 1);
+  }
   SECTION("the sheet swung over a ball that lay beside it: none") {
     drape::scenes::SheetCrossings meter(asset);
     world.body(0).state.pose.position = {0.16, 0, -0.04};
