@@ -5,7 +5,7 @@
 // meshDrop: a cloth dropped on meshed solids (grid fields), landing included.
 // ballDrop: a cloth dropped on a ball, landing included, with and without continuous contact.
 // ballScene: a cloth settled on a ball and the floor, the face method against vertex contacts, at two sizes on
-// one and two threads.
+// one and two threads. capsuleScene: the same over a capsule lying on the floor.
 // undoableStep: the slope (faces, 10 substeps) stepped with an observer that may throw, so each step keeps its
 // start to be undone, against a noexcept one.
 // keptSpin: the slope and the ball scene without and with Settings::keepAngularMomentum.
@@ -147,11 +147,18 @@ void ballDrop(benchmark::State& state) {
 /// substeps, area density 0.1 kg/m^2), timed after 2 s of settling, step after step: the first scene most users
 /// try, with the default face method (method 0) against vertex contacts only (method 1). Side 256: a 256 x 256
 /// cloth of 5 mm spacing over the same ball, nearly the same area, for the cost per vertex as the cloth grows.
-drape::Solver<float> settledOnBall(const drape::Settings& settings, bool large) {
+drape::Solver<float> settledOnBall(const drape::Settings& settings, bool large, bool capsule = false) {
   drape::Solid<drape::Sphere> ball;
   ball.shape.radius = 0.3;
   ball.pose.position = {0, 0, 0.3};
   ball.staticFriction = ball.dynamicFriction = 0.3;
+  // The capsule: an arm's or a rail's shape, lying along y on the floor under the cloth's long side.
+  drape::Solid<drape::Capsule> bar;
+  bar.shape.radius = 0.15;
+  bar.shape.halfHeight = 0.45;
+  bar.pose.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(0.5 * 3.14159265358979, Eigen::Vector3d::UnitX()));
+  bar.pose.position = {0, 0, 0.15};
+  bar.staticFriction = bar.dynamicFriction = 0.3;
   drape::Solid<drape::Plane> floor;
   floor.staticFriction = floor.dynamicFriction = 0.3;
   drape::SheetDesc sheet;
@@ -161,17 +168,20 @@ drape::Solver<float> settledOnBall(const drape::Settings& settings, bool large) 
   sheet.placement.position = {0.01, -0.02, 0.65};
   const auto asset = std::make_shared<const drape::ClothAsset<float>>(drape::ClothAsset<float>::sheet(sheet));
   drape::Solver<float> solver(asset, settings, 0.1);
-  solver.addSolid(ball);
+  if (capsule)
+    solver.addSolid(bar);
+  else
+    solver.addSolid(ball);
   solver.addSolid(floor);
   for (int f = 0; f < 120; ++f) solver.step(1.0 / 60);
   return solver;
 }
 
-void ballScene(benchmark::State& state) {
+void curvedScene(benchmark::State& state, bool capsule) {
   drape::Settings settings;
   settings.collisionMethod = state.range(0) == 0 ? drape::CollisionMethod::Faces : drape::CollisionMethod::Vertices;
   settings.threadCount = int(state.range(2));
-  drape::Solver<float> solver = settledOnBall(settings, state.range(1) == 256);
+  drape::Solver<float> solver = settledOnBall(settings, state.range(1) == 256, capsule);
   long long faceContacts = 0, vertexContacts = 0, facesTested = 0, facesCulled = 0, keptClear = 0, steps = 0;
   for (auto _ : state) {
     solver.step(1.0 / 60, [&](const auto& s) {
@@ -194,6 +204,8 @@ void ballScene(benchmark::State& state) {
   state.counters["faces_culled"] = double(facesCulled) / substeps;
   state.counters["faces_kept_clear"] = double(keptClear) / substeps;
 }
+void ballScene(benchmark::State& state) { curvedScene(state, false); }
+void capsuleScene(benchmark::State& state) { curvedScene(state, true); }
 
 /// What Settings::keepAngularMomentum costs (docs/design.md §4), on one thread: scene 0 is the slope (faces, 10
 /// substeps, settled), scene 1 the 50 x 80 cloth settled on the ball; keep 0 without it, 1 with it.
@@ -268,6 +280,13 @@ BENCHMARK(ballDrop)
 BENCHMARK(ballScene)
     ->ArgNames({"method", "side", "threads"})
     ->ArgsProduct({{0, 1}, {50, 256}, {1, 2}})
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
+
+// The same over a capsule of radius 0.15 m lying on the floor under the cloth, on one thread.
+BENCHMARK(capsuleScene)
+    ->ArgNames({"method", "side", "threads"})
+    ->ArgsProduct({{0, 1}, {50}, {1}})
     ->UseRealTime()
     ->Unit(benchmark::kMillisecond);
 

@@ -276,7 +276,7 @@ float boundOnTriangle(vec3 u0, vec3 u1, vec3 u2, out vec3 at, out float middleVa
 }
 #endif
 
-#if DRAPE_SHAPE == DRAPE_SHAPE_SPHERE
+#if DRAPE_SHAPE == DRAPE_SHAPE_SPHERE || DRAPE_SHAPE == DRAPE_SHAPE_CAPSULE
 // The point of the triangle (a, b, c) nearest to p as barycentric weights w (nearestOnTriangle in
 // include/drape/collision/pgd.hpp and nearestRegion in include/drape/detail/triangle.hpp, step for step); false for
 // a triangle too flat for the interior's weights.
@@ -324,6 +324,88 @@ bool nearestOnTriangle(vec3 p, vec3 a, vec3 b, vec3 c, out vec3 w) {
 }
 #endif
 
+#if DRAPE_SHAPE == DRAPE_SHAPE_CAPSULE
+// Whether the point of the triangle (a, b, c) nearest to p lies inside it: nearestRegion's Face
+// (include/drape/detail/triangle.hpp), step for step.
+bool nearestIsInside(vec3 p, vec3 a, vec3 b, vec3 c) {
+  precise const vec3 ab = b - a, ac = c - a, ap = p - a;
+  precise const float d1 = dot3(ab, ap), d2 = dot3(ac, ap);
+  if (d1 <= 0.0 && d2 <= 0.0) return false;
+  precise const vec3 bp = p - b;
+  precise const float d3 = dot3(ab, bp), d4 = dot3(ac, bp);
+  if (d3 >= 0.0 && d4 <= d3) return false;
+  precise const float vc = d1 * d4 - d3 * d2;
+  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) return false;
+  precise const vec3 cp = p - c;
+  precise const float d5 = dot3(ab, cp), d6 = dot3(ac, cp);
+  if (d6 >= 0.0 && d5 <= d6) return false;
+  precise const float vb = d5 * d2 - d1 * d6;
+  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) return false;
+  precise const float va = d3 * d6 - d5 * d4;
+  return !(va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0);
+}
+
+// The squared distance from x to the segment a + s d, s in [0, 1], of squared length length2 (squaredToSegment in
+// include/drape/collision/pgd.hpp).
+float squaredToSegment(vec3 x, vec3 a, vec3 d, float length2) {
+  precise const vec3 r = x - a;
+  precise const float s = length2 > 0.0 ? clamp(dot3(d, r) / length2, 0.0, 1.0) : 0.0;
+  precise const vec3 off = r + (-s) * d;
+  return dot3(off, off);
+}
+
+// The point of the triangle (x0, x1, x2) nearest to the segment [a, b] as barycentric weights w (nearestToSegment
+// in include/drape/collision/pgd.hpp, step for step): the least of the segment's ends against the triangle, the
+// corners against the segment and the edges' lines against the segment's where both nearest points are inside;
+// false for a flat triangle and where the segment crosses it or lies in its plane.
+bool nearestToSegment(vec3 a, vec3 b, vec3 x0, vec3 x1, vec3 x2, out vec3 w) {
+  precise const vec3 e1 = x1 - x0, e2 = x2 - x0;
+  precise const vec3 normal =
+      vec3(e1.y * e2.z - e1.z * e2.y, e1.z * e2.x - e1.x * e2.z, e1.x * e2.y - e1.y * e2.x);  // Eigen's cross
+  w = vec3(1.0 / 3.0);
+  if (!(dot3(normal, normal) > DRAPE_FLAT_SINE2 * dot3(e1, e1) * dot3(e2, e2))) return false;
+  precise const vec3 d = b - a;
+  precise const float da = dot3(normal, a - x0), db = dot3(normal, b - x0);
+  if (!(da > 0.0 && db > 0.0) && !(da < 0.0 && db < 0.0)) {  // the segment meets the triangle's plane
+    if (!(da != db)) return false;
+    precise const float f = da / (da - db);
+    if (nearestIsInside(a + f * d, x0, x1, x2)) return false;
+  }
+  float best = uintBitsToFloat(0x7F800000u);  // infinity
+  vec3 u;
+  if (!nearestOnTriangle(a, x0, x1, x2, u)) return false;
+  precise vec3 off = ((x0 + u.y * e1) + u.z * e2) - a;
+  float dist = dot3(off, off);
+  if (dist < best) best = dist, w = u;
+  if (!nearestOnTriangle(b, x0, x1, x2, u)) return false;
+  off = ((x0 + u.y * e1) + u.z * e2) - b;
+  dist = dot3(off, off);
+  if (dist < best) best = dist, w = u;
+  precise const float length2 = dot3(d, d);
+  for (int k = 0; k < 3; ++k) {
+    const vec3 c = k == 0 ? x0 : (k == 1 ? x1 : x2);
+    const vec3 next = k == 0 ? x1 : (k == 1 ? x2 : x0);
+    dist = squaredToSegment(c, a, d, length2);
+    if (dist < best) best = dist, w = vec3(k == 0 ? 1.0 : 0.0, k == 1 ? 1.0 : 0.0, k == 2 ? 1.0 : 0.0);
+    precise const vec3 e = next - c, r = a - c;
+    precise const float ee = dot3(e, e), de = dot3(d, e), dr = dot3(d, r), er = dot3(e, r);
+    precise const float det = length2 * ee - de * de;
+    if (!(det > DRAPE_PARALLEL_SINE2 * length2 * ee)) continue;
+    precise const float s = (de * er - dr * ee) / det, t = (length2 * er - de * dr) / det;
+    if (!(s >= 0.0 && s <= 1.0 && t >= 0.0 && t <= 1.0)) continue;
+    precise const vec3 between = (r + s * d) + (-t) * e;
+    dist = dot3(between, between);
+    if (dist < best) {
+      best = dist;
+      w = vec3(0.0);
+      w[k] = 1.0 - t;
+      w[(k + 1) % 3] = t;
+    }
+  }
+  return true;
+}
+#endif
+
 // One face against the field (queryFace): the bounding-sphere cull and, if the face may come within `margin`, its
 // deepest point (barycentric qb, point qp, normal qn, distance qphi). False when culled.
 bool searchFace(vec3 x0, vec3 x1, vec3 x2, float margin, out vec3 qb, out vec3 qn, out vec3 qp, out float qphi) {
@@ -343,6 +425,30 @@ bool searchFace(vec3 x0, vec3 x1, vec3 x2, float margin, out vec3 qb, out vec3 q
       precise const vec3 p = (x0 + nb.y * (x1 - x0)) + nb.z * (x2 - x0);
       precise const vec3 d = p - shape[0].xyz;
       if (dot3(d, d) > reach * reach) return false;
+      qb = nb, qp = p;
+      qphi = sdf(p, qn);
+      return true;
+    }
+  }
+#elif DRAPE_SHAPE == DRAPE_SHAPE_CAPSULE
+  // A capsule is deepest where the face is nearest its core segment: the closed form of nearestToSegment
+  // (include/drape/collision/pgd.hpp), culled first by the corners as on a ball, then by the squared distance. A
+  // face the core crosses goes to the cutting planes.
+  {
+    precise const float reach = shape[1].w + margin;
+    const vec3 axis = shape[1].xyz;
+    precise const vec3 a = shape[0].xyz + (-shape[0].w) * axis, b = shape[0].xyz + shape[0].w * axis;
+    precise const vec3 d = b - a;
+    precise const float length2 = dot3(d, d);
+    precise const float corner = min(min(squaredToSegment(x0, a, d, length2), squaredToSegment(x1, a, d, length2)),
+                                     squaredToSegment(x2, a, d, length2));
+    precise const float edge = max(max(dot3(x1 - x0, x1 - x0), dot3(x2 - x1, x2 - x1)), dot3(x0 - x2, x0 - x2));
+    precise const float clear = reach * (1.0 + DRAPE_CORNER_CULL_SLACK);
+    if (3.0 * (corner - clear * clear) > edge) return false;
+    vec3 nb;
+    if (nearestToSegment(a, b, x0, x1, x2, nb)) {
+      precise const vec3 p = (x0 + nb.y * (x1 - x0)) + nb.z * (x2 - x0);
+      if (squaredToSegment(p, a, d, length2) > reach * reach) return false;
       qb = nb, qp = p;
       qphi = sdf(p, qn);
       return true;

@@ -44,6 +44,7 @@ TEST_CASE("every shared constant reaches the shaders as the float the CPU kernel
                {"DRAPE_CUT_SLACK", c::kCutSlack},
                {"DRAPE_FLAT_SINE2", c::kFlatSine2},
                {"DRAPE_CORNER_CULL_SLACK", c::kCornerCullSlack},
+               {"DRAPE_PARALLEL_SINE2", c::kParallelSine2},
                {"DRAPE_MIN_DESCENT_STEP", c::kMinDescentStep},
                {"DRAPE_GRID_LIPSCHITZ", c::kGridLipschitz},
                {"DRAPE_FEATURE_BARYCENTRIC", c::kFeatureBarycentric},

@@ -238,9 +238,13 @@ TEMPLATE_TEST_CASE("with the angular momentum kept, the cloth on a frictionless 
                    "[kinematic][spin]", float, double) {
   // The sphere drape's cloth on a capsule with the same top: its corners hang down the side, which curves about
   // the axis only, so a contact there keeps only the velocity around the axis (keepTurnAbout). Measured after
-  // 10 s at 2 substeps (bench/spin_drift 10 2), float / double: faces -3.7e-4 / +5.0e-4 rad/s, vertices
-  // -2.3e-8 / -1.7e-17; with the side's contacts left unscaled the vertices method turned at 1.4e-4 / 1.7e-4,
-  // which its bound here sees; without the setting, 0.23-0.47.
+  // 10 s at 2 substeps (bench/spin_drift 10 2), vertices -2.3e-8 / -1.7e-17 rad/s (float / double); with the
+  // side's contacts left unscaled the vertices method turned at 1.4e-4 / 1.7e-4, which its bound here sees;
+  // without the setting, 0.23-0.47. The faces method's remainder is gained while the cloth lands and is chaotic:
+  // with the capsule moved 0 to 6 mm down its axis (seven starts, float and double) it ends between -2.0e-3 and
+  // +2.2e-3 rad/s (+2.2e-3 from this start, in double), and ended between -2.5e-3 and +4.1e-3 when the capsule's
+  // faces were searched by cutting planes rather than in closed form. The bound sits above that spread, 50 times
+  // below the turn without the setting.
   using S = TestType;
   using M = drape::CollisionMethod;
   const double seconds = 10;
@@ -249,7 +253,7 @@ TEMPLATE_TEST_CASE("with the angular momentum kept, the cloth on a frictionless 
     double bound;
   };
   const std::vector<Case> cases = drape::test::kSanitized ? std::vector<Case>{{M::Vertices, 1e-5}}
-                                                          : std::vector<Case>{{M::Faces, 2e-3}, {M::Vertices, 1e-5}};
+                                                          : std::vector<Case>{{M::Faces, 5e-3}, {M::Vertices, 1e-5}};
   for (const Case& c : cases) {
     const double turn = drapeTurn<S>(c.method, true, 0.0, seconds, {.substeps = 2, .capsule = true});
     INFO(drape::toString(c.method) << ": turn " << turn << " rad/s after " << seconds << " s");

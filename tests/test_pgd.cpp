@@ -419,6 +419,173 @@ TEMPLATE_TEST_CASE("a face is culled from a ball by its corners only where no po
 }
 
 // ============================================================================================================
+// 2c. The capsule's closed form
+
+namespace {
+
+/// The distance from the segment [a, b] to the triangle t, in double, by another route than nearestToSegment's:
+/// the distance from a point of the segment to the triangle is convex along it, so a golden-section search over
+/// the segment finds its least value.
+double segmentToTriangle(const V3& a, const V3& b, const std::array<V3, 3>& t) {
+  const double ratio = (std::sqrt(5.0) - 1) / 2;
+  double lo = 0, hi = 1;
+  double m1 = hi - ratio * (hi - lo), m2 = lo + ratio * (hi - lo);
+  double f1 = distanceToTriangle(a + m1 * (b - a), t), f2 = distanceToTriangle(a + m2 * (b - a), t);
+  for (int k = 0; k < 120; ++k) {
+    if (f1 <= f2) {
+      hi = m2, m2 = m1, f2 = f1;
+      m1 = hi - ratio * (hi - lo);
+      f1 = distanceToTriangle(a + m1 * (b - a), t);
+    } else {
+      lo = m1, m1 = m2, f1 = f2;
+      m2 = lo + ratio * (hi - lo);
+      f2 = distanceToTriangle(a + m2 * (b - a), t);
+    }
+  }
+  return std::min({f1, f2, distanceToTriangle(a, t), distanceToTriangle(b, t)});
+}
+
+}  // namespace
+
+TEMPLATE_TEST_CASE("on a capsule the face search is the face's point nearest the core segment, exact to rounding",
+                   "[pgd]", float, double) {
+  using S = TestType;
+  constexpr S eps = std::numeric_limits<S>::epsilon();
+  const S thickness = S(drape::Settings{}.thickness);
+  const int iterations = drape::Settings{}.pgdIterations;
+  std::mt19937 rng(616);
+  // An arm's capsule, a 3 mm rod thinner than a face, and one shorter than a face.
+  for (const drape::Capsule cap : {drape::Capsule{0.15, 0.45}, drape::Capsule{0.0015, 0.2}, drape::Capsule{0.01, 0.005}}) {
+    const drape::Pose pose{randomRotation(rng), kWorld + randomInBall(rng, 0.2)};
+    const auto sdf = drape::detail::compileSdf<S>(cap, pose, kOrigin);
+    const V3 axis = pose.rotation * V3::UnitZ();
+    int closedForm = 0, culled = 0, other = 0;
+    double worst = 0;
+    for (int k = 0; k < 600; ++k) {
+      const double reach = k % 3 == 0 ? 0.02 : 0.006;
+      // On the side or beyond a cap, within the reach of the surface or of the core.
+      const double along = uniform(rng, -cap.halfHeight - 0.3 * cap.radius, cap.halfHeight + 0.3 * cap.radius);
+      const V3 core = pose.position + std::clamp(along, -cap.halfHeight, cap.halfHeight) * axis;
+      V3 out = randomUnit(rng);
+      if (std::abs(along) <= cap.halfHeight) out = (out - out.dot(axis) * axis).normalized();
+      const V3 near = cap.radius > kEdge ? V3(core + (cap.radius + uniform(rng, -reach, reach)) * out)
+                                         : V3(core + randomInBall(rng, cap.radius + reach));
+      Tri tri = randomTriangle(rng, near, kEdge);
+      if (k % 10 == 1) tri.x[2] = tri.x[0] + uniform(rng, 1e-4, 1e-2) * (tri.x[2] - tri.x[0]);  // a sliver
+      if (k % 10 == 3) {  // the core through the face
+        const V3 shift = core - (0.2 * tri.x[0] + 0.5 * tri.x[1] + 0.3 * tri.x[2]);
+        for (V3& v : tri.x) v += shift;
+      }
+      if (k % 10 == 5) {  // an edge along the axis, a cloth lying along the capsule
+        const V3 side = axis.cross(out).normalized();
+        tri.x[0] = near - 0.5 * kEdge * axis;
+        tri.x[1] = near + 0.5 * kEdge * axis + uniform(rng, -1e-5, 1e-5) * out;
+        tri.x[2] = near + uniform(rng, -0.5, 0.5) * kEdge * axis + kEdge * side + uniform(rng, -0.3, 0.3) * kEdge * out;
+      }
+      auto x = toLocal<S>(tri, kOrigin);
+      if (k % 10 == 2) x[2] = S(0.5) * (x[0] + x[1]);  // no area, as rounding leaves it
+      // The reference in the frame the field was compiled in, from what the search saw.
+      const std::array<V3, 3> seen = {x[0].template cast<double>(), x[1].template cast<double>(),
+                                      x[2].template cast<double>()};
+      const V3 c = sdf.centre.template cast<double>(), u = sdf.axis.template cast<double>();
+      const double h = double(sdf.halfHeight);
+      const double exact = segmentToTriangle(c - h * u, c + h * u, seen) - double(sdf.radius);
+      drape::FaceQuery<S> q;
+      REQUIRE(drape::queryFace<false>(sdf, x[0], x[1], x[2], S(0), iterations, q));
+      const S brute = bruteMinimum<S>(sdf, x, 200);
+      const double edge = tri.meanEdge();
+      // Rounding: the coordinates (within a metre of the local origin) and the core's distance.
+      const double tolerance = 64 * double(eps);
+      INFO("capsule r=" << cap.radius << " h=" << cap.halfHeight << " triangle " << k << ": search " << q.phi
+                        << " (b = " << q.barycentric.transpose() << "), exact " << exact << ", brute " << brute);
+      CHECK(q.barycentric.allFinite());
+      CHECK((q.barycentric.array() >= S(0)).all());
+      CHECK(double(q.phi) <= double(brute) + 1e-3 * edge);
+      Vec3<S> g;
+      CHECK(std::abs(double(sdf(q.point, g) - q.phi)) <= tolerance);
+      Vec3<S> b;
+      if (drape::nearestToSegment<S>(sdf.centre - sdf.halfHeight * sdf.axis, sdf.centre + sdf.halfHeight * sdf.axis,
+                                     x[0], x[1], x[2], b)) {
+        ++closedForm;
+        worst = std::max(worst, std::abs(double(q.phi) - exact));
+        CHECK(std::abs(double(q.phi) - exact) <= tolerance);
+      } else {
+        ++other;  // flat, or crossed by the core: searched by the cutting planes
+      }
+      // The culling search drops only faces clear of the thickness.
+      drape::FaceQuery<S> kept;
+      if (!drape::queryFace<true>(sdf, x[0], x[1], x[2], thickness, iterations, kept)) {
+        ++culled;
+        CHECK(exact > double(thickness) - tolerance);
+      }
+    }
+    std::printf("[pgd] %-6s capsule r=%g h=%g: closed form on %d faces, worst |search - exact| %.1e m, %d flat or "
+                "crossed, %d culled\n",
+                sizeof(S) == 4 ? "float" : "double", cap.radius, cap.halfHeight, closedForm, worst, other, culled);
+    CHECK(closedForm >= 300);  // around the rod, many random faces are crossed by its core
+    CHECK(culled > 0);
+  }
+}
+
+TEMPLATE_TEST_CASE("a face is culled from a capsule by its corners only where no point of it comes within the "
+                   "thickness",
+                   "[pgd][culling]", float, double) {
+  // Equilateral faces square to the surface, just inside and just outside the thickness: over a cap, straight out
+  // from its centre, the corners' bound is exact, as on a ball; along the side it is looser. Those inside must be
+  // kept.
+  using S = TestType;
+  const S thickness = S(drape::Settings{}.thickness);
+  const int iterations = drape::Settings{}.pgdIterations;
+  std::mt19937 rng(734);
+  int kept = 0, culled = 0;
+  for (const drape::Capsule cap : {drape::Capsule{0.15, 0.45}, drape::Capsule{0.003, 0.2}}) {
+    const drape::Pose pose{randomRotation(rng), kWorld + randomInBall(rng, 0.2)};
+    const auto sdf = drape::detail::compileSdf<S>(cap, pose, kOrigin);
+    const V3 axis = pose.rotation * V3::UnitZ();
+    const double reach = cap.radius + double(thickness);
+    for (int k = 0; k < 300; ++k) {
+      const double side = std::array{0.005, 0.02, 0.05}[std::size_t(k % 3)];
+      const bool inside = k % 2 == 0;
+      const double height = reach * (inside ? 1 - 1e-3 : 1 + 1e-3);
+      const bool overCap = k % 4 < 2;
+      V3 base, u;
+      if (overCap) {  // beyond an end, straight out from the cap's centre
+        const double end = (k % 8 < 4 ? 1.0 : -1.0) * cap.halfHeight;
+        u = (end * axis / cap.halfHeight + 0.5 * (randomUnit(rng) - randomUnit(rng).dot(axis) * axis)).normalized();
+        if (u.dot(axis) * end <= 0) u = (end > 0 ? 1.0 : -1.0) * axis;
+        base = pose.position + end * axis;
+      } else {  // beside the side
+        u = randomUnit(rng).cross(axis).normalized();
+        base = pose.position + uniform(rng, -0.5, 0.5) * cap.halfHeight * axis;
+      }
+      const V3 a = u.unitOrthogonal(), b = u.cross(a);
+      const double turn = uniform(rng, 0, 2 * std::numbers::pi), r = side / std::sqrt(3.0);
+      Tri tri;
+      for (int j = 0; j < 3; ++j) {
+        const double angle = turn + 2 * std::numbers::pi * j / 3;
+        tri.x[std::size_t(j)] = base + height * u + r * (std::cos(angle) * a + std::sin(angle) * b);
+      }
+      const auto x = toLocal<S>(tri, kOrigin);
+      drape::FaceQuery<S> q;
+      const bool found = drape::queryFace<true>(sdf, x[0], x[1], x[2], thickness, iterations, q);
+      INFO("capsule r=" << cap.radius << " side " << side << (overCap ? " over a cap" : " beside the side")
+                        << (inside ? ", inside" : ", outside") << " the thickness");
+      if (inside) {
+        REQUIRE(found);
+        CHECK(q.phi < thickness);
+        ++kept;
+      } else {
+        CHECK((!found || q.phi >= thickness));
+        culled += !found;
+      }
+    }
+  }
+  std::printf("[pgd] %-6s capsule, equilateral faces at the thickness: %d kept inside, %d of %d culled outside\n",
+              sizeof(S) == 4 ? "float" : "double", kept, culled, kept);
+  CHECK(culled > kept / 2);
+}
+
+// ============================================================================================================
 // 3. Culling
 
 TEMPLATE_TEST_CASE("bounding-sphere culling never rejects a face within the thickness", "[culling]", float, double) {

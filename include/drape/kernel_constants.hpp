@@ -36,6 +36,9 @@ inline constexpr double kCutSlack = 0.01;
 /// A face whose sine of the angle between its edges from the first corner is below the root of this is flat for
 /// the closed-form nearest point: rounding (a fused multiply-add) can put it in the wrong Voronoi region.
 inline constexpr double kFlatSine2 = 1e-6;
+/// A capsule's core and a face's edge whose sine of the angle between them is below the root of this are
+/// parallel for the closed-form nearest point (nearestToSegment): their lines' nearest points are then not sought.
+inline constexpr double kParallelSine2 = 1e-5;
 /// A face is culled from a ball by its corners (queryFace) only where they clear the ball's reach grown by this
 /// share of it, so that rounding cannot cull a face that the nearest point would keep.
 inline constexpr double kCornerCullSlack = 1e-4;

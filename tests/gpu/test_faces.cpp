@@ -209,6 +209,19 @@ TEST_CASE("collide_faces: the GPU face pass against projectFaceContacts, colour 
       return ball;
     });
   }
+  SECTION("capsules") {
+    // A capsule lying across the cloth, 2 cm through it: a 3 mm rod, whose core crosses faces (the cutting planes
+    // take those), and a 6 cm one, whose faces the closed form takes.
+    const float radius = GENERATE(0.003f, 0.06f);
+    INFO("capsule radius " << radius << " m");
+    compareFacePass<drape::Capsule>([&](const Eigen::Vector3d& origin) {
+      drape::Solid<drape::Capsule> bar{drape::Capsule{radius, 0.08}};
+      bar.pose.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(1.2, Eigen::Vector3d(0.3, 1, 0.1).normalized()));
+      bar.pose.position = origin + Eigen::Vector3d(0.003, -0.004, 0.02 - radius);
+      bar.staticFriction = 0.3;
+      return bar;
+    });
+  }
   SECTION("a ball pressing beside a fixed row, where the faces' moves are capped (kFaceMoveCap)") {
     // The faces between the fixed row and the next have their deepest point 1 mm from the fixed edge, 1 cm deep:
     // their free corner's share is 0.05, so the uncapped move would be 20 times the depth (0.2 m); capped, 3 cm.

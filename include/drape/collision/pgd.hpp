@@ -1,7 +1,7 @@
 #pragma once
 // The deepest point of a face in a solid: bounding-sphere culling, and a cutting-plane search over the face's
-// barycentric simplex (in place of the projected gradient descent of the SDF collision paper, Fig 1); on a ball,
-// the face's point nearest the centre in closed form.
+// barycentric simplex (in place of the projected gradient descent of the SDF collision paper, Fig 1); on a ball
+// and a capsule, the face's point nearest the centre or the core segment in closed form.
 
 #include <drape/detail/parallel.hpp>
 #include <drape/detail/triangle.hpp>
@@ -64,6 +64,86 @@ DRAPE_ALWAYS_INLINE bool nearestOnTriangle(const Vec3<S>& p, const Vec3<S>& x0, 
   }
   b = Vec3<S>(S(1) - r.s - r.t, r.s, r.t);
   return !r.flat;
+}
+
+namespace detail {
+
+/// a . b in Eigen's order for three terms, a0 b0 + (a1 b1 + a2 b2), and a - b, written out: in the face pass,
+/// too large for GCC's inliner, Eigen's reductions became calls.
+template <Scalar S> DRAPE_ALWAYS_INLINE S dot3(const Vec3<S>& a, const Vec3<S>& b) {
+  return a.x() * b.x() + (a.y() * b.y() + a.z() * b.z());
+}
+template <Scalar S> DRAPE_ALWAYS_INLINE Vec3<S> minus3(const Vec3<S>& a, const Vec3<S>& b) {
+  return Vec3<S>(a.x() - b.x(), a.y() - b.y(), a.z() - b.z());
+}
+/// The squared distance from x to the segment a + s d, s in [0, 1], of squared length `length2`.
+template <Scalar S>
+DRAPE_ALWAYS_INLINE S squaredToSegment(const Vec3<S>& x, const Vec3<S>& a, const Vec3<S>& d, S length2) {
+  const Vec3<S> r = minus3(x, a);
+  const S s = length2 > S(0) ? std::clamp(dot3(d, r) / length2, S(0), S(1)) : S(0);
+  const Vec3<S> off = movedAlong(r, -s, d);
+  return dot3(off, off);
+}
+
+}  // namespace detail
+
+/// The point of the triangle (x0, x1, x2) nearest to the segment [a, b] (a capsule's core), as barycentric
+/// weights. The nearest pair of points is one of: an end of the segment with its nearest point of the triangle, a
+/// corner of the triangle with its nearest point of the segment, or an interior point of the segment with one of
+/// an edge where the two lines' nearest points both fall inside; or the segment crosses the triangle. Each
+/// candidate is a true pair of points, so the least of them never undercuts the distance: where a segment and an
+/// edge are too nearly parallel for their lines' nearest points (kParallelSine2), an end of one of them is as
+/// near to within the square of the angle. False for a flat triangle and where the segment crosses the triangle
+/// or lies in its plane: the face then holds a point of the core, and which side to push it to is the search's.
+/// Inlined into the face pass, as nearestOnTriangle is. The GLSL twin (shaders/collide_faces.comp) follows it
+/// step for step.
+template <Scalar S>
+DRAPE_ALWAYS_INLINE bool nearestToSegment(const Vec3<S>& a, const Vec3<S>& b, const Vec3<S>& x0, const Vec3<S>& x1,
+                                          const Vec3<S>& x2, Vec3<S>& w) {
+  using detail::dot3, detail::minus3;
+  const Vec3<S> e1 = minus3(x1, x0), e2 = minus3(x2, x0);
+  const Vec3<S> normal = e1.cross(e2);
+  if (!(dot3(normal, normal) > S(constants::kFlatSine2) * dot3(e1, e1) * dot3(e2, e2))) return false;
+  const Vec3<S> d = minus3(b, a);
+  const S da = dot3(normal, minus3(a, x0)), db = dot3(normal, minus3(b, x0));
+  if (!(da > S(0) && db > S(0)) && !(da < S(0) && db < S(0))) {  // the segment meets the triangle's plane
+    if (!(da != db)) return false;                                // in it, or of no length on it
+    const detail::TriangleRegion<S> r = detail::nearestRegion<S>(movedAlong(a, da / (da - db), d), x0, x1, x2);
+    if (r.feature == detail::TriangleFeature::Face) return false;
+  }
+  S best = std::numeric_limits<S>::infinity();
+  // The segment's ends.
+  for (const Vec3<S>* end : {&a, &b}) {
+    Vec3<S> u;
+    if (!nearestOnTriangle<S>(*end, x0, x1, x2, u)) return false;
+    const Vec3<S> off = minus3(movedAlong(movedAlong(x0, u[1], e1), u[2], e2), *end);
+    const S dist = dot3(off, off);
+    if (dist < best) best = dist, w = u;
+  }
+  const S length2 = dot3(d, d);
+  const Vec3<S>* corners[3] = {&x0, &x1, &x2};
+  for (int k = 0; k < 3; ++k) {
+    // Corner k and its nearest point of the segment.
+    const Vec3<S>& c = *corners[k];
+    const S dist = detail::squaredToSegment(c, a, d, length2);
+    if (dist < best) best = dist, w = Vec3<S>::Unit(k);
+    // The edge from corner k to the next, against the segment: both lines' nearest points, where both are inside.
+    const Vec3<S> e = minus3(*corners[(k + 1) % 3], c), r = minus3(a, c);
+    const S ee = dot3(e, e), de = dot3(d, e), dr = dot3(d, r), er = dot3(e, r);
+    const S det = length2 * ee - de * de;
+    if (!(det > S(constants::kParallelSine2) * length2 * ee)) continue;
+    const S s = (de * er - dr * ee) / det, t = (length2 * er - de * dr) / det;
+    if (!(s >= S(0) && s <= S(1) && t >= S(0) && t <= S(1))) continue;
+    const Vec3<S> off = movedAlong(movedAlong(r, s, d), -t, e);
+    const S between = dot3(off, off);
+    if (between < best) {
+      best = between;
+      w = Vec3<S>::Zero();
+      w[k] = S(1) - t;
+      w[(k + 1) % 3] = t;
+    }
+  }
+  return true;
 }
 
 /// Bounding sphere of a face: centre at the centroid, radius the largest centroid-to-vertex distance.
@@ -287,6 +367,45 @@ DRAPE_ALWAYS_INLINE bool queryFace(const Field& sdf, const Vec3<S>& x0, const Ve
       Vec3<S> n;
       const S phi = sdf(p, n);
       q = {b, p, n, phi, 1};
+      return true;
+    }
+  }
+  if constexpr (requires { Field::kSegmentCore; }) {
+    // The distance to a segment less a radius (a capsule) is deepest where the face is nearest the segment: the
+    // ball's closed form and corner cull, with the segment for the centre. For any point c of the segment the
+    // identity above bounds |p - c|, so the nearest corner's squared distance from the segment less a third of
+    // the longest edge's square bounds the face's.
+    const S reach = sdf.radius + margin;
+    const Vec3<S> a = movedAlong(sdf.centre, -sdf.halfHeight, sdf.axis);
+    const Vec3<S> b = movedAlong(sdf.centre, sdf.halfHeight, sdf.axis);
+    const Vec3<S> d = detail::minus3(b, a);
+    const S length2 = detail::dot3(d, d);
+    if constexpr (kCull) {
+      const S corner = std::min({detail::squaredToSegment(x0, a, d, length2), detail::squaredToSegment(x1, a, d, length2),
+                                 detail::squaredToSegment(x2, a, d, length2)});
+      const Vec3<S> e01 = detail::minus3(x1, x0), e12 = detail::minus3(x2, x1), e20 = detail::minus3(x0, x2);
+      const S edge = std::max({detail::dot3(e01, e01), detail::dot3(e12, e12), detail::dot3(e20, e20)});
+      const S clear = reach * S(1 + constants::kCornerCullSlack);
+      if (S(3) * (corner - clear * clear) > edge) {
+        if constexpr (kClearance)
+          *clearance = std::sqrt(corner - edge / S(3)) - reach -
+                       S(kClearanceSlack) * (reach + sdf.halfHeight + sdf.centre.cwiseAbs().maxCoeff());
+        return false;
+      }
+    }
+    Vec3<S> w;
+    if (nearestToSegment<S>(a, b, x0, x1, x2, w)) {
+      const Vec3<S> p = x0 + w[1] * (x1 - x0) + w[2] * (x2 - x0);
+      const S core = detail::squaredToSegment(p, a, d, length2);
+      if (kCull && core > reach * reach) {
+        if constexpr (kClearance)
+          *clearance = std::sqrt(core) - reach -
+                       S(kClearanceSlack) * (reach + sdf.halfHeight + sdf.centre.cwiseAbs().maxCoeff());
+        return false;
+      }
+      Vec3<S> n;
+      const S phi = sdf(p, n);
+      q = {w, p, n, phi, 1};
       return true;
     }
   }

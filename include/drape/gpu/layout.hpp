@@ -276,6 +276,7 @@ inline std::string preamble(const std::string& defines = {}) {
   s += define("DRAPE_CUT_SLACK", constants::kCutSlack);
   s += define("DRAPE_FLAT_SINE2", constants::kFlatSine2);
   s += define("DRAPE_CORNER_CULL_SLACK", constants::kCornerCullSlack);
+  s += define("DRAPE_PARALLEL_SINE2", constants::kParallelSine2);
   s += define("DRAPE_MIN_DESCENT_STEP", constants::kMinDescentStep);
   s += define("DRAPE_GRID_SEARCH_DEPTH", constants::kGridSearchDepth);
   s += define("DRAPE_GRID_SEARCH_BUDGET", constants::kGridSearchBudget);

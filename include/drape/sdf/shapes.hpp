@@ -81,6 +81,8 @@ template <Scalar S> struct Sdf<Box, S> {
 template <Scalar S> struct Sdf<Capsule, S> {
   static constexpr bool kLinear = false;
   static constexpr bool kConvex = true;
+  /// phi is the distance from the core segment less the radius: a face is deepest nearest the segment
+  static constexpr bool kSegmentCore = true;
   static constexpr bool kSmooth = true;  ///< no edges: the gradient turns smoothly along the surface
   Vec3<S> centre;
   Vec3<S> axis;  ///< unit, world
