@@ -433,7 +433,7 @@ bool searchFace(vec3 x0, vec3 x1, vec3 x2, float margin, out vec3 qb, out vec3 q
 #elif DRAPE_SHAPE == DRAPE_SHAPE_CAPSULE
   // A capsule is deepest where the face is nearest its core segment: the closed form of nearestToSegment
   // (include/drape/collision/pgd.hpp), culled first by the corners as on a ball, then by the squared distance. A
-  // face the core crosses goes to the cutting planes.
+  // face the core crosses, or wider than the capsule, goes to the cutting planes.
   {
     precise const float reach = shape[1].w + margin;
     const vec3 axis = shape[1].xyz;
@@ -446,7 +446,7 @@ bool searchFace(vec3 x0, vec3 x1, vec3 x2, float margin, out vec3 qb, out vec3 q
     precise const float clear = reach * (1.0 + DRAPE_CORNER_CULL_SLACK);
     if (3.0 * (corner - clear * clear) > edge) return false;
     vec3 nb;
-    if (nearestToSegment(a, b, x0, x1, x2, nb)) {
+    if (4.0 * reach * reach >= edge && nearestToSegment(a, b, x0, x1, x2, nb)) {
       precise const vec3 p = (x0 + nb.y * (x1 - x0)) + nb.z * (x2 - x0);
       if (squaredToSegment(p, a, d, length2) > reach * reach) return false;
       qb = nb, qp = p;

@@ -374,17 +374,18 @@ DRAPE_ALWAYS_INLINE bool queryFace(const Field& sdf, const Vec3<S>& x0, const Ve
     // The distance to a segment less a radius (a capsule) is deepest where the face is nearest the segment: the
     // ball's closed form and corner cull, with the segment for the centre. For any point c of the segment the
     // identity above bounds |p - c|, so the nearest corner's squared distance from the segment less a third of
-    // the longest edge's square bounds the face's.
+    // the longest edge's square bounds the face's. A capsule narrower than the face (a rod the cloth folds
+    // around) keeps the cutting planes after the cull (docs/design.md §3, "A capsule in closed form").
     const S reach = sdf.radius + margin;
     const Vec3<S> a = movedAlong(sdf.centre, -sdf.halfHeight, sdf.axis);
     const Vec3<S> b = movedAlong(sdf.centre, sdf.halfHeight, sdf.axis);
     const Vec3<S> d = detail::minus3(b, a);
     const S length2 = detail::dot3(d, d);
+    const Vec3<S> e01 = detail::minus3(x1, x0), e12 = detail::minus3(x2, x1), e20 = detail::minus3(x0, x2);
+    const S edge = std::max({detail::dot3(e01, e01), detail::dot3(e12, e12), detail::dot3(e20, e20)});
     if constexpr (kCull) {
       const S corner = std::min({detail::squaredToSegment(x0, a, d, length2), detail::squaredToSegment(x1, a, d, length2),
                                  detail::squaredToSegment(x2, a, d, length2)});
-      const Vec3<S> e01 = detail::minus3(x1, x0), e12 = detail::minus3(x2, x1), e20 = detail::minus3(x0, x2);
-      const S edge = std::max({detail::dot3(e01, e01), detail::dot3(e12, e12), detail::dot3(e20, e20)});
       const S clear = reach * S(1 + constants::kCornerCullSlack);
       if (S(3) * (corner - clear * clear) > edge) {
         if constexpr (kClearance)
@@ -394,7 +395,7 @@ DRAPE_ALWAYS_INLINE bool queryFace(const Field& sdf, const Vec3<S>& x0, const Ve
       }
     }
     Vec3<S> w;
-    if (nearestToSegment<S>(a, b, x0, x1, x2, w)) {
+    if (S(4) * reach * reach >= edge && nearestToSegment<S>(a, b, x0, x1, x2, w)) {
       const Vec3<S> p = x0 + w[1] * (x1 - x0) + w[2] * (x2 - x0);
       const S core = detail::squaredToSegment(p, a, d, length2);
       if (kCull && core > reach * reach) {
