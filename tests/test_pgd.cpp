@@ -511,7 +511,8 @@ TEMPLATE_TEST_CASE("on a capsule the face search is the face's point nearest the
       Vec3<S> g;
       CHECK(std::abs(double(sdf(q.point, g) - q.phi)) <= tolerance);
       Vec3<S> b;
-      const S longest = std::max({(x[1] - x[0]).squaredNorm(), (x[2] - x[1]).squaredNorm(), (x[0] - x[2]).squaredNorm()});
+      const S longest =
+          std::max({(x[1] - x[0]).squaredNorm(), (x[2] - x[1]).squaredNorm(), (x[0] - x[2]).squaredNorm()});
       if (S(4) * sdf.radius * sdf.radius >= longest &&
           drape::nearestToSegment<S>(sdf.centre - sdf.halfHeight * sdf.axis, sdf.centre + sdf.halfHeight * sdf.axis,
                                      x[0], x[1], x[2], b)) {

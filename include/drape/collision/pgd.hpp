@@ -384,7 +384,8 @@ DRAPE_ALWAYS_INLINE bool queryFace(const Field& sdf, const Vec3<S>& x0, const Ve
     const Vec3<S> e01 = detail::minus3(x1, x0), e12 = detail::minus3(x2, x1), e20 = detail::minus3(x0, x2);
     const S edge = std::max({detail::dot3(e01, e01), detail::dot3(e12, e12), detail::dot3(e20, e20)});
     if constexpr (kCull) {
-      const S corner = std::min({detail::squaredToSegment(x0, a, d, length2), detail::squaredToSegment(x1, a, d, length2),
+      const S corner = std::min({detail::squaredToSegment(x0, a, d, length2),
+                                 detail::squaredToSegment(x1, a, d, length2),
                                  detail::squaredToSegment(x2, a, d, length2)});
       const S clear = reach * S(1 + constants::kCornerCullSlack);
       if (S(3) * (corner - clear * clear) > edge) {
