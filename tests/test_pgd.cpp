@@ -372,6 +372,40 @@ TEMPLATE_TEST_CASE("on a ball the face search is the face's point nearest the ce
   }
 }
 
+namespace {
+
+/// An equilateral face of side `side` square to the unit u, its centroid at `centre`, turned by a random angle.
+Tri equilateralFace(std::mt19937& rng, const V3& centre, const V3& u, double side) {
+  const V3 a = u.unitOrthogonal(), b = u.cross(a);
+  const double turn = uniform(rng, 0, 2 * std::numbers::pi), r = side / std::sqrt(3.0);
+  Tri tri;
+  for (int j = 0; j < 3; ++j) {
+    const double angle = turn + 2 * std::numbers::pi * j / 3;
+    tri.x[std::size_t(j)] = centre + r * (std::cos(angle) * a + std::sin(angle) * b);
+  }
+  return tri;
+}
+
+/// A face at the edge of the thickness, against the culling search: one just inside must be kept, with its deepest
+/// point within the thickness; one just outside must not be a contact, and is counted where it was culled.
+template <class S, class Field>
+void checkAtThickness(const Field& sdf, const Tri& tri, bool inside, S thickness, int iterations, int& kept,
+                      int& culled) {
+  const auto x = toLocal<S>(tri, kOrigin);
+  drape::FaceQuery<S> q;
+  const bool found = drape::queryFace<true>(sdf, x[0], x[1], x[2], thickness, iterations, q);
+  if (inside) {
+    REQUIRE(found);
+    CHECK(q.phi < thickness);
+    ++kept;
+  } else {
+    CHECK((!found || q.phi >= thickness));
+    culled += !found;
+  }
+}
+
+}  // namespace
+
 TEMPLATE_TEST_CASE("a face is culled from a ball by its corners only where no point of it comes within the thickness",
                    "[pgd][culling]", float, double) {
   // An equilateral face whose centroid lies straight out from the centre is where the corners' bound (the nearest
@@ -392,25 +426,9 @@ TEMPLATE_TEST_CASE("a face is culled from a ball by its corners only where no po
       // Within a thousandth of the reach of the thickness' edge, either side of it.
       const double height = reach * (inside ? 1 - 1e-3 : 1 + 1e-3);
       const V3 u = randomUnit(rng);
-      const V3 a = u.unitOrthogonal(), b = u.cross(a);
-      const double turn = uniform(rng, 0, 2 * std::numbers::pi), r = side / std::sqrt(3.0);
-      Tri tri;
-      for (int j = 0; j < 3; ++j) {
-        const double angle = turn + 2 * std::numbers::pi * j / 3;
-        tri.x[std::size_t(j)] = pose.position + height * u + r * (std::cos(angle) * a + std::sin(angle) * b);
-      }
-      const auto x = toLocal<S>(tri, kOrigin);
-      drape::FaceQuery<S> q;
-      const bool found = drape::queryFace<true>(sdf, x[0], x[1], x[2], thickness, iterations, q);
+      const Tri tri = equilateralFace(rng, pose.position + height * u, u, side);
       INFO("radius " << radius << " side " << side << (inside ? " inside" : " outside") << " the thickness");
-      if (inside) {
-        REQUIRE(found);
-        CHECK(q.phi < thickness);
-        ++kept;
-      } else {
-        CHECK((!found || q.phi >= thickness));
-        culled += !found;
-      }
+      checkAtThickness<S>(sdf, tri, inside, thickness, iterations, kept, culled);
     }
   }
   std::printf("[pgd] %-6s ball, equilateral faces at the thickness: %d kept inside, %d of %d culled outside\n",
@@ -460,9 +478,9 @@ TEMPLATE_TEST_CASE("on a capsule the face search is the face's point nearest the
     drape::Capsule cap;
     int closedAtLeast, closedAtMost;
   };
-  for (const Case& c : {Case{{0.15, 0.45}, 450, 600}, Case{{0.02, 0.2}, 300, 600}, Case{{0.03, 0.005}, 300, 600},
+  for (const Case& item : {Case{{0.15, 0.45}, 450, 600}, Case{{0.02, 0.2}, 300, 600}, Case{{0.03, 0.005}, 300, 600},
                         Case{{0.0015, 0.2}, 0, 0}}) {
-    const drape::Capsule& cap = c.cap;
+    const drape::Capsule& cap = item.cap;
     const drape::Pose pose{randomRotation(rng), kWorld + randomInBall(rng, 0.2)};
     const auto sdf = drape::detail::compileSdf<S>(cap, pose, kOrigin);
     const V3 axis = pose.rotation * V3::UnitZ();
@@ -532,8 +550,8 @@ TEMPLATE_TEST_CASE("on a capsule the face search is the face's point nearest the
     std::printf("[pgd] %-6s capsule r=%g h=%g: closed form on %d faces, worst |search - exact| %.1e m, %d flat, "
                 "crossed or narrow, %d culled\n",
                 sizeof(S) == 4 ? "float" : "double", cap.radius, cap.halfHeight, closedForm, worst, other, culled);
-    CHECK(closedForm >= c.closedAtLeast);  // around a thin capsule, many random faces are crossed by its core
-    CHECK(closedForm <= c.closedAtMost);
+    CHECK(closedForm >= item.closedAtLeast);  // around a thin capsule, many random faces are crossed by its core
+    CHECK(closedForm <= item.closedAtMost);
     CHECK(culled > 0);
   }
 }
@@ -562,33 +580,18 @@ TEMPLATE_TEST_CASE("a face is culled from a capsule by its corners only where no
       V3 base, u;
       if (overCap) {  // beyond an end, straight out from the cap's centre
         const double end = (k % 8 < 4 ? 1.0 : -1.0) * cap.halfHeight;
-        u = (end * axis / cap.halfHeight + 0.5 * (randomUnit(rng) - randomUnit(rng).dot(axis) * axis)).normalized();
+        const V3 tilt = randomUnit(rng);
+        u = (end * axis / cap.halfHeight + 0.5 * (tilt - tilt.dot(axis) * axis)).normalized();
         if (u.dot(axis) * end <= 0) u = (end > 0 ? 1.0 : -1.0) * axis;
         base = pose.position + end * axis;
       } else {  // beside the side
         u = randomUnit(rng).cross(axis).normalized();
         base = pose.position + uniform(rng, -0.5, 0.5) * cap.halfHeight * axis;
       }
-      const V3 a = u.unitOrthogonal(), b = u.cross(a);
-      const double turn = uniform(rng, 0, 2 * std::numbers::pi), r = side / std::sqrt(3.0);
-      Tri tri;
-      for (int j = 0; j < 3; ++j) {
-        const double angle = turn + 2 * std::numbers::pi * j / 3;
-        tri.x[std::size_t(j)] = base + height * u + r * (std::cos(angle) * a + std::sin(angle) * b);
-      }
-      const auto x = toLocal<S>(tri, kOrigin);
-      drape::FaceQuery<S> q;
-      const bool found = drape::queryFace<true>(sdf, x[0], x[1], x[2], thickness, iterations, q);
+      const Tri tri = equilateralFace(rng, base + height * u, u, side);
       INFO("capsule r=" << cap.radius << " side " << side << (overCap ? " over a cap" : " beside the side")
                         << (inside ? ", inside" : ", outside") << " the thickness");
-      if (inside) {
-        REQUIRE(found);
-        CHECK(q.phi < thickness);
-        ++kept;
-      } else {
-        CHECK((!found || q.phi >= thickness));
-        culled += !found;
-      }
+      checkAtThickness<S>(sdf, tri, inside, thickness, iterations, kept, culled);
     }
   }
   std::printf("[pgd] %-6s capsule, equilateral faces at the thickness: %d kept inside, %d of %d culled outside\n",
