@@ -945,7 +945,6 @@ inline void respondFour(Index i, ContactBuffer<float>& contacts, Vec3<float>* x,
 }
 
 #if DRAPE_AVX2
-#define DRAPE_TARGET_AVX2 __attribute__((target("avx2")))
 DRAPE_TARGET_AVX2 inline __m256 join(__m128 lo, __m128 hi) {
   return _mm256_insertf128_ps(_mm256_castps128_ps256(lo), hi, 1);
 }
@@ -1027,7 +1026,6 @@ DRAPE_TARGET_AVX2 inline void respondEight(Index i, ContactBuffer<float>& contac
                  _mm256_add_ps(_mm256_add_ps(cz, _mm256_mul_ps(vnNew, nz)), tz));
   _mm256_storeu_ps(contacts.normalDv.data() + i, _mm256_add_ps(zero, _mm256_max_ps(zero, _mm256_sub_ps(vnNew, vn))));
 }
-#undef DRAPE_TARGET_AVX2
 #endif
 
 }  // namespace detail

@@ -165,7 +165,6 @@ inline void solveDistanceBlock(const DistanceBlock<float>& block, const float* m
 #endif
 
 #if DRAPE_AVX2
-#define DRAPE_TARGET_AVX2 __attribute__((target("avx2")))
 
 /// Two vertices in one register: lo's in the low half, hi's in the high half.
 DRAPE_TARGET_AVX2 inline __m256 loadPair(const float* lo, const float* hi) {
@@ -249,7 +248,6 @@ DRAPE_TARGET_AVX2 void solveColourAvx2(Index begin, Index end, const DistanceBlo
                                   kLambda ? lambda + k * kLanes : nullptr, xw);
   }
 }
-#undef DRAPE_TARGET_AVX2
 #endif
 
 }  // namespace detail

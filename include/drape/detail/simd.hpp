@@ -17,6 +17,7 @@
 #if DRAPE_SSE2 && (defined(__GNUC__) || defined(__clang__)) && (defined(__x86_64__) || defined(__i386__))
 #include <immintrin.h>
 #define DRAPE_AVX2 1
+#define DRAPE_TARGET_AVX2 __attribute__((target("avx2")))
 #else
 #define DRAPE_AVX2 0
 #endif
