@@ -434,7 +434,8 @@ TEST_CASE("the spin sums in AVX2 lanes give the scalar loop's bits and the sums 
       const long double m = 1.0L / w[i];
       long double x[3], d[3], s[3];
       for (int k = 0; k < 3; ++k) x[k] = solved[i][k], d[k] = m * (x[k] - predicted[i][k]), s[k] = start[i][k];
-      moment[0] += s[1] * d[2] - s[2] * d[1], moment[1] += s[2] * d[0] - s[0] * d[2], moment[2] += s[0] * d[1] - s[1] * d[0];
+      moment[0] += s[1] * d[2] - s[2] * d[1], moment[1] += s[2] * d[0] - s[0] * d[2];
+      moment[2] += s[0] * d[1] - s[1] * d[0];
       weight += m;
       for (int k = 0; k < 3; ++k) {
         push[k] += d[k], first[k] += m * x[k];
@@ -461,7 +462,8 @@ TEST_CASE("the spin sums in AVX2 lanes give the scalar loop's bits and the sums 
     CHECK(same(lanes.push, scalar.push));
     CHECK(same(lanes.first, scalar.first));
     CHECK(same(lanes.second, scalar.second));
-    CHECK((kFusedBuild ? std::abs(lanes.weight - scalar.weight) <= 1e-12 * scalar.weight : lanes.weight == scalar.weight));
+    CHECK((kFusedBuild ? std::abs(lanes.weight - scalar.weight) <= 1e-12 * scalar.weight
+                       : lanes.weight == scalar.weight));
   }
   // The restoring rotation: four lanes against the scalar loop; kinematic vertices keep their velocity.
   if (drape::bestSimdLevel() < SimdLevel::Sse2) return;

@@ -91,8 +91,8 @@ DRAPE_TARGET_AVX2 inline void addSpinTermsFour(__m256d (&a)[16], Index i, const 
   loadVec3Four(start + i, sx, sy, sz);
   const __m256d w = _mm256_cvtps_pd(_mm_loadu_ps(invMass + i));
   // A kinematic vertex's lane divides 1 by 1, not by 0 (which may trap), and takes mass 0.
-  const __m256d free = _mm256_cmp_pd(w, _mm256_setzero_pd(), _CMP_GT_OQ), one = _mm256_set1_pd(1.0);
-  const __m256d m = _mm256_and_pd(free, _mm256_div_pd(one, _mm256_blendv_pd(one, w, free)));
+  const __m256d isFree = _mm256_cmp_pd(w, _mm256_setzero_pd(), _CMP_GT_OQ), one = _mm256_set1_pd(1.0);
+  const __m256d m = _mm256_and_pd(isFree, _mm256_div_pd(one, _mm256_blendv_pd(one, w, isFree)));
   const __m256d x0 = _mm256_cvtps_pd(r0), x1 = _mm256_cvtps_pd(r1), x2 = _mm256_cvtps_pd(r2);
   const __m256d d0 = _mm256_mul_pd(m, _mm256_sub_pd(x0, _mm256_cvtps_pd(px))),
                 d1 = _mm256_mul_pd(m, _mm256_sub_pd(x1, _mm256_cvtps_pd(py))),
@@ -142,7 +142,7 @@ SpinSums sumSolvePushes(Index begin, Index end, const Vec4<S>* solved, const Vec
   for (; i < end; ++i)
     detail::addSpinTerms(a, int((i - begin) % 4), solved[i].data(), predicted[i].data(), start[i].data(), invMass[i]);
   double t[16];
-  for (int k = 0; k < 16; ++k) t[k] = ((a[std::size_t(k)][0] + a[std::size_t(k)][1]) + a[std::size_t(k)][2]) + a[std::size_t(k)][3];
+  for (std::size_t k = 0; k < 16; ++k) t[k] = ((a[k][0] + a[k][1]) + a[k][2]) + a[k][3];
   SpinSums s;
   s.moment = {t[0], t[1], t[2]};
   s.push = {t[3], t[4], t[5]};
@@ -227,12 +227,12 @@ void applySpin(Index begin, Index end, const Vec4<S>* solved, const S* invMass, 
         _MM_TRANSPOSE4_PS(x0, x1, x2, x3);
         __m128 vx, vy, vz;
         detail::loadVec3Four(v + i, vx, vy, vz);
-        const __m128 free = _mm_cmpgt_ps(_mm_loadu_ps(invMass + i), _mm_setzero_ps());
+        const __m128 isFree = _mm_cmpgt_ps(_mm_loadu_ps(invMass + i), _mm_setzero_ps());
         const __m128 nx = _mm_add_ps(vx, _mm_sub_ps(_mm_sub_ps(_mm_mul_ps(o1, x2), _mm_mul_ps(o2, x1)), b0));
         const __m128 ny = _mm_add_ps(vy, _mm_sub_ps(_mm_sub_ps(_mm_mul_ps(o2, x0), _mm_mul_ps(o0, x2)), b1));
         const __m128 nz = _mm_add_ps(vz, _mm_sub_ps(_mm_sub_ps(_mm_mul_ps(o0, x1), _mm_mul_ps(o1, x0)), b2));
-        detail::storeVec3Four(v + i, detail::select(free, nx, vx), detail::select(free, ny, vy),
-                              detail::select(free, nz, vz));
+        detail::storeVec3Four(v + i, detail::select(isFree, nx, vx), detail::select(isFree, ny, vy),
+                              detail::select(isFree, nz, vz));
       }
     }
   }
