@@ -214,9 +214,15 @@ TEMPLATE_TEST_CASE("with a solid that holds most of the cloth, the broad phase s
 /// A cloth settling on a still ball (0.3 m, its box holds most of the cloth) and the floor, beside a still
 /// capsule (its faces come from the bins' lists): the ball's face pass keeps each culled face's clearance between
 /// substeps and passes over the faces still clear. The ball is moved into the cloth by setSolid, and the thickness
-/// changed, midway: the kept clearances must not outlive either.
-template <class S> drape::Solver<S> stillBallScene(bool broadPhase, int threads) {
+/// changed, midway: the kept clearances must not outlive either. With `keepSpin` (Settings::keepAngularMomentum)
+/// the face pass records the corners' own normals and scales their velocities about the ball's centre.
+template <class S> drape::Solver<S> stillBallScene(bool broadPhase, int threads, bool keepSpin = false) {
   drape::Solver<S> cloth = sheetOverFloor<S>({0.003, -0.004, 0.64}, 0.3, broadPhase, threads);
+  if (keepSpin) {
+    drape::Settings settings = cloth.settings();
+    settings.keepAngularMomentum = true;
+    cloth.setSettings(settings);
+  }
   drape::Solid<drape::Sphere> ball;
   ball.shape.radius = 0.3;
   ball.pose.position = {0, 0, 0.3};
@@ -233,9 +239,11 @@ TEMPLATE_TEST_CASE("faces kept clear of a still ball between substeps are passed
                    "broad phase, also when the ball moves or the thickness changes",
                    "[broadphase]", float, double) {
   using S = TestType;
-  auto plain = stillBallScene<S>(false, 1);
-  auto gridded = stillBallScene<S>(true, 1);
-  auto twoThreads = stillBallScene<S>(true, 2);
+  const bool keepSpin = GENERATE(false, true);
+  INFO("angular momentum kept: " << keepSpin);
+  auto plain = stillBallScene<S>(false, 1, keepSpin);
+  auto gridded = stillBallScene<S>(true, 1, keepSpin);
+  auto twoThreads = stillBallScene<S>(true, 2, keepSpin);
   std::int64_t kept = 0, tested = 0, faceContacts = 0, keptBeforeMove = 0;
   for (int f = 0; f < 90; ++f) {
     if (f == 40) {  // the ball moves 1 cm up and 2 cm aside, into the cloth resting on it

@@ -171,8 +171,7 @@ template <Scalar S> class ContactPasses {
   /// rebuilt, a solid is added or replaced or the thickness changes. Null elsewhere. Called by one thread.
   template <class Solid> Clearances* clearancesFor(const Solid& solid, Index place, const PassInputs<S>& in) {
     const SolidMotion<S>& m = solid.motion;
-    if (!keepClearances_ || in.keepTurn != nullptr || m.body >= 0 || !m.linearVelocity.isZero(0) ||
-        !m.angularVelocity.isZero(0))
+    if (!keepClearances_ || m.body >= 0 || !m.linearVelocity.isZero(0) || !m.angularVelocity.isZero(0))
       return nullptr;
     if (clearances_.size() <= std::size_t(place)) clearances_.resize(std::size_t(place) + 1);
     Clearances& c = clearances_[std::size_t(place)];

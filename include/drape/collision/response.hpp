@@ -709,10 +709,17 @@ S projectFaceContacts(const CompiledSolid<Shape, S>& solid, S thickness, int pgd
                       Vec3<S>* keepTurn = nullptr, KeptClearance<S> skip = {}) {
   const bool body = solid.motion.body >= 0;
   if constexpr (kCull && kBoxed && !kSweep) {
-    if (skip.clear != nullptr && !body && !ownNormals)
+    if (skip.clear != nullptr && !body) {
+      if constexpr (kSmoothField<Shape, S>) {
+        if (ownNormals)  // the corners' own normals change the records, not which faces are culled
+          return projectFaceContactsAs<kCull, false, kBoxed, kSweep, true, true>(
+              solid, thickness, pgdIterations, triangles, ids, count, x, invMass, contacts, stats, binned,
+              exactSearch, sweep, keepTurn, skip);
+      }
       return projectFaceContactsAs<kCull, false, kBoxed, kSweep, false, true>(
           solid, thickness, pgdIterations, triangles, ids, count, x, invMass, contacts, stats, binned, exactSearch,
           sweep, keepTurn, skip);
+    }
   }
   if constexpr (kSmoothField<Shape, S>) {
     if (ownNormals && !body)
