@@ -4,6 +4,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -29,6 +30,16 @@ concept Scalar = std::is_same_v<S, float> || std::is_same_v<S, double>;
 /// caller then read back as one wide load, a store-forwarding stall each time.
 template <Scalar S> inline Vec3<S> movedAlong(const Vec3<S>& a, S s, const Vec3<S>& n) {
   return Vec3<S>(a.x() + s * n.x(), a.y() + s * n.y(), a.z() + s * n.z());
+}
+
+/// The square root through Eigen's scalar root, an SSE instruction on x86: for std::sqrt, which may set errno,
+/// GCC keeps a call to libm beside the instruction, and on the face pass's paths called it every time. The same
+/// correctly rounded result.
+template <Scalar S> inline S rootOf(S x) { return Eigen::numext::sqrt(x); }
+
+/// The largest absolute coordinate, written out: on a hot path Eigen's reduction became a call.
+template <Scalar S> inline S largestAbs(const Vec3<S>& a) {
+  return std::max(std::max(std::abs(a.x()), std::abs(a.y())), std::abs(a.z()));
 }
 
 /// Every rejected input throws this, with a message that names what was wrong. It is thrown before any

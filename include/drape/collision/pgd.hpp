@@ -76,6 +76,14 @@ template <Scalar S> DRAPE_ALWAYS_INLINE S dot3(const Vec3<S>& a, const Vec3<S>& 
 template <Scalar S> DRAPE_ALWAYS_INLINE Vec3<S> minus3(const Vec3<S>& a, const Vec3<S>& b) {
   return Vec3<S>(a.x() - b.x(), a.y() - b.y(), a.z() - b.z());
 }
+/// x0 + b1 (x1 - x0) + b2 (x2 - x0), in Eigen's order, written out: in the face pass the Eigen expression became
+/// a call.
+template <Scalar S>
+DRAPE_ALWAYS_INLINE Vec3<S> pointOnFace(const Vec3<S>& x0, const Vec3<S>& x1, const Vec3<S>& x2, S b1, S b2) {
+  return Vec3<S>(x0.x() + b1 * (x1.x() - x0.x()) + b2 * (x2.x() - x0.x()),
+                 x0.y() + b1 * (x1.y() - x0.y()) + b2 * (x2.y() - x0.y()),
+                 x0.z() + b1 * (x1.z() - x0.z()) + b2 * (x2.z() - x0.z()));
+}
 /// The squared distance from x to the segment a + s d, s in [0, 1], of squared length `length2`.
 template <Scalar S>
 DRAPE_ALWAYS_INLINE S squaredToSegment(const Vec3<S>& x, const Vec3<S>& a, const Vec3<S>& d, S length2) {
@@ -349,19 +357,19 @@ DRAPE_ALWAYS_INLINE bool queryFace(const Field& sdf, const Vec3<S>& x0, const Ve
       const S clear = reach * S(1 + constants::kCornerCullSlack);
       if (S(3) * (corner - clear * clear) > edge) {  // no division: its latency was the test's cost
         if constexpr (kClearance)
-          *clearance = std::sqrt(corner - edge / S(3)) - reach -
-                       S(kClearanceSlack) * (reach + sdf.centre.cwiseAbs().maxCoeff());
+          *clearance = rootOf(corner - edge / S(3)) - reach -
+                       S(kClearanceSlack) * (reach + largestAbs(sdf.centre));
         return false;
       }
     }
     Vec3<S> b;
     if (nearestOnTriangle<S>(sdf.centre, x0, x1, x2, b)) {
-      const Vec3<S> p = x0 + b[1] * (x1 - x0) + b[2] * (x2 - x0);
+      const Vec3<S> p = detail::pointOnFace(x0, x1, x2, b[1], b[2]);
       // The rest are told by the squared distance, without a root or a division.
       if (kCull && (p - sdf.centre).squaredNorm() > reach * reach) {
         if constexpr (kClearance)
           *clearance = (p - sdf.centre).norm() - reach -
-                       S(kClearanceSlack) * (reach + sdf.centre.cwiseAbs().maxCoeff());
+                       S(kClearanceSlack) * (reach + largestAbs(sdf.centre));
         return false;
       }
       Vec3<S> n;
@@ -390,19 +398,19 @@ DRAPE_ALWAYS_INLINE bool queryFace(const Field& sdf, const Vec3<S>& x0, const Ve
       const S clear = reach * S(1 + constants::kCornerCullSlack);
       if (S(3) * (corner - clear * clear) > edge) {
         if constexpr (kClearance)
-          *clearance = std::sqrt(corner - edge / S(3)) - reach -
-                       S(kClearanceSlack) * (reach + sdf.halfHeight + sdf.centre.cwiseAbs().maxCoeff());
+          *clearance = rootOf(corner - edge / S(3)) - reach -
+                       S(kClearanceSlack) * (reach + sdf.halfHeight + largestAbs(sdf.centre));
         return false;
       }
     }
     Vec3<S> w;
     if (S(4) * reach * reach >= edge && nearestToSegment<S>(a, b, x0, x1, x2, w)) {
-      const Vec3<S> p = x0 + w[1] * (x1 - x0) + w[2] * (x2 - x0);
+      const Vec3<S> p = detail::pointOnFace(x0, x1, x2, w[1], w[2]);
       const S core = detail::squaredToSegment(p, a, d, length2);
       if (kCull && core > reach * reach) {
         if constexpr (kClearance)
-          *clearance = std::sqrt(core) - reach -
-                       S(kClearanceSlack) * (reach + sdf.halfHeight + sdf.centre.cwiseAbs().maxCoeff());
+          *clearance = rootOf(core) - reach -
+                       S(kClearanceSlack) * (reach + sdf.halfHeight + largestAbs(sdf.centre));
         return false;
       }
       Vec3<S> n;
@@ -420,7 +428,7 @@ DRAPE_ALWAYS_INLINE bool queryFace(const Field& sdf, const Vec3<S>& x0, const Ve
       if constexpr (kClearance)
         *clearance = bound - sphere.radius - margin -
                      S(kClearanceSlack) *
-                         (sphere.centre.cwiseAbs().maxCoeff() + sphere.radius + std::abs(bound) + margin);
+                         (largestAbs(sphere.centre) + sphere.radius + std::abs(bound) + margin);
       return false;
     }
   }
@@ -433,7 +441,7 @@ DRAPE_ALWAYS_INLINE bool queryFace(const Field& sdf, const Vec3<S>& x0, const Ve
     if constexpr (kClearance)
       *clearance = (phiC - kLipschitz * sphere.radius - margin) / kLipschitz -
                    S(kClearanceSlack) *
-                       (sphere.centre.cwiseAbs().maxCoeff() + sphere.radius + std::abs(phiC) + margin);
+                       (largestAbs(sphere.centre) + sphere.radius + std::abs(phiC) + margin);
     return false;
   }
   // With culling, the search's own bounds cull too.

@@ -695,7 +695,7 @@ S projectFaceContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, int p
                                       solid.motion.contactVelocityAt(p, n, anchor));
       moved = std::max(moved, (p - binned[t[k]]).squaredNorm());
     }
-    if constexpr (kSkip) reached = std::max(skip.drift, std::sqrt(moved));
+    if constexpr (kSkip) reached = std::max(skip.drift, rootOf(moved));
   }
   counts.facesTested += count;
   stats += counts;
@@ -1164,17 +1164,17 @@ template <Scalar S> struct PropagationBuffer {
 /// sources). So the normal is carried from the sources' mean position `x` to the vertex with the curvature
 /// their positions and normals give, sum (d_i - mean d) . (n_i - mean n) / sum |d_i - mean d|^2 (exact on a
 /// ball, 0 on a plane), where at least two sources are spread apart.
-template <bool kCurved = false, Scalar S>
-void propagateRing(Index begin, Index end, int ring, const ContactBuffer<S>& contacts, PropagationBuffer<S>& buf,
-                   const Adjacency& neighbours, Vec3<S>* v, const S* invMass, S weight,
-                   [[maybe_unused]] const Vec3<S>* x = nullptr) {
+template <bool kCurved, bool kFirst, Scalar S>
+void propagateRingAs(Index begin, Index end, int ring, const ContactBuffer<S>& contacts, PropagationBuffer<S>& buf,
+                     const Adjacency& neighbours, Vec3<S>* v, const S* invMass, S weight,
+                     [[maybe_unused]] const Vec3<S>* x) {
   const std::uint32_t mark = contacts.current;
   const std::uint64_t from = buf.key(ring - 1), to = buf.key(ring);
   const std::uint64_t* reachFrom = buf.reach[(ring - 1) & 1].data();
   std::uint64_t* reachTo = buf.reach[ring & 1].data();
   for (Index j = begin; j < end; ++j) {
     if (contacts.stamp[j] == mark || invMass[j] == S(0)) continue;
-    if (ring > 1 && buf.reachedThisPass(j)) continue;  // settled in an earlier ring
+    if (!kFirst && buf.reachedThisPass(j)) continue;  // settled in an earlier ring
     Vec3<S> normalSum = Vec3<S>::Zero();
     // kCurved: the sources' offsets d = x_i - x_j and the sums the curvature is fitted from
     [[maybe_unused]] Vec3<S> offsetSum = Vec3<S>::Zero();
@@ -1184,7 +1184,7 @@ void propagateRing(Index begin, Index end, int ring, const ContactBuffer<S>& con
     for (const Index* it = neighbours.begin(j); it != neighbours.end(j); ++it) {
       const Index i = *it;
       Vec3<S> ni;
-      if (ring == 1) {
+      if constexpr (kFirst) {
         if (contacts.stamp[i] != mark || contacts.normalDv[i] <= S(0)) continue;
         ni = contacts.normal(i);
         speedSum += ni.dot(contacts.solidVelocity(i));
@@ -1233,6 +1233,17 @@ void propagateRing(Index begin, Index end, int ring, const ContactBuffer<S>& con
     buf.normal[j] = nj;
     buf.normalSpeed[j] = vcn;
   }
+}
+template <bool kCurved = false, Scalar S>
+void propagateRing(Index begin, Index end, int ring, const ContactBuffer<S>& contacts, PropagationBuffer<S>& buf,
+                   const Adjacency& neighbours, Vec3<S>* v, const S* invMass, S weight,
+                   const Vec3<S>* x = nullptr) {
+  // The first ring gathers from the contacts, the others from the ring before: two loops, so that the test
+  // is not made per neighbour.
+  if (ring == 1)
+    propagateRingAs<kCurved, true>(begin, end, ring, contacts, buf, neighbours, v, invMass, weight, x);
+  else
+    propagateRingAs<kCurved, false>(begin, end, ring, contacts, buf, neighbours, v, invMass, weight, x);
 }
 
 }  // namespace drape

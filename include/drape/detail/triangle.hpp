@@ -3,6 +3,8 @@
 // classification of Ericson, "Real-Time Collision Detection", 2005, §5.1.5): shared by the distance-field builder
 // (in double, on meshes) and the face search on a ball (in the cloth's scalar type).
 
+#include <drape/detail/parallel.hpp>
+
 #include <cstdint>
 
 namespace drape::detail {
@@ -20,8 +22,9 @@ template <class S> struct TriangleRegion {
   bool flat = false;
 };
 
+/// Inlined: called from the face pass on a ball, its result went back through memory.
 template <class S, class Vec>
-TriangleRegion<S> nearestRegion(const Vec& p, const Vec& a, const Vec& b, const Vec& c) {
+DRAPE_ALWAYS_INLINE TriangleRegion<S> nearestRegion(const Vec& p, const Vec& a, const Vec& b, const Vec& c) {
   using F = TriangleFeature;
   const Vec ab = b - a, ac = c - a, ap = p - a;
   const S d1 = ab.dot(ap), d2 = ac.dot(ap);

@@ -4,6 +4,7 @@
 // compiles each one, once per substep, into an Sdf of the cloth's scalar type, relative to the cloth's local
 // origin, so float keeps its precision far from the world origin.
 
+#include <drape/detail/parallel.hpp>
 #include <drape/math.hpp>
 #include <drape/shapes/shapes.hpp>
 
@@ -36,7 +37,8 @@ template <Scalar S> struct Sdf<Sphere, S> {
   Vec3<S> centre;
   S radius;
 
-  S operator()(const Vec3<S>& x, Vec3<S>& gradient) const {
+  // Inlined: the face pass on a ball evaluates it once per face contact; called, it was 3 % of the step.
+  DRAPE_ALWAYS_INLINE S operator()(const Vec3<S>& x, Vec3<S>& gradient) const {
     const Vec3<S> d = x - centre;
     const S len = d.norm();
     gradient = len > S(0) ? Vec3<S>(d / len) : Vec3<S>::UnitZ();
