@@ -1,8 +1,10 @@
 // Spin from nothing (docs/design.md §4): a 41x41 cloth (2 cm) draped from the top of a frictionless 0.3 m sphere,
 // its centre vertex pinned on the vertical axis through the sphere's centre. No force can turn the cloth about
 // that axis, so its mass-weighted angular momentum about it, L_z = sum m (x v_y - y v_x), should stay at zero.
-// Printed for every collision method, float and double, the sphere at rest and spinning at 2 rad/s and a
-// standing capsule with the same top (the skirt hangs down its side, curved about the axis only), at each
+// Printed for every collision method, float and double, the sphere at rest and spinning at 2 rad/s, a standing
+// capsule with the same top (the skirt hangs down its side, curved about the axis only), a standing cylinder
+// with the same top (a field with edges: the cloth folds over its rim) and the sphere as a grid field built from a
+// mesh (whose faces' normals are not radial: it can turn the cloth by a little), at each
 // substep count given, with Settings::keepAngularMomentum off and on: L_z after the run, and L_z / I_z (the
 // cloth's turn, rad/s). The same cloth hanging from its pin with no solid at all shows the constraint solve's
 // share.
@@ -19,7 +21,7 @@ namespace {
 
 using namespace drape;
 
-enum class Under { Nothing, Sphere, Capsule };
+enum class Under { Nothing, Sphere, Capsule, Cylinder, MeshBall };
 
 template <class S>
 scenes::AxialSpin run(CollisionMethod method, int substeps, double spin, Under under, double seconds, bool keep) {
@@ -31,6 +33,8 @@ scenes::AxialSpin run(CollisionMethod method, int substeps, double spin, Under u
   Solver<S> solver(SphereDrape::asset<S>(), settings);
   if (under == Under::Sphere) solver.addSolid(SphereDrape::sphere(spin));
   if (under == Under::Capsule) solver.addSolid(SphereDrape::standingCapsule(spin));
+  if (under == Under::Cylinder) solver.addSolid(SphereDrape::standingCylinder());
+  if (under == Under::MeshBall) solver.addSolid(SphereDrape::meshBall());
   solver.pin(SphereDrape::kCentre);
   for (int f = 0; f < int(seconds * 60 + 0.5); ++f) solver.step(1.0 / 60.0);
   return scenes::axialSpin(solver);
@@ -63,6 +67,8 @@ int main(int argc, char** argv) {
   for (const Scene scene : {Scene{"sphere at rest", Under::Sphere, 0.0},
                             Scene{"sphere spinning at 2 rad/s", Under::Sphere, 2.0},
                             Scene{"standing capsule at rest", Under::Capsule, 0.0},
+                            Scene{"standing cylinder at rest", Under::Cylinder, 0.0},
+                            Scene{"sphere from a mesh, at rest", Under::MeshBall, 0.0},
                             Scene{"no solid", Under::Nothing, 0.0}})
     for (int n : substeps)
       for (CollisionMethod m : {CollisionMethod::Faces, CollisionMethod::Vertices, CollisionMethod::InSolve})

@@ -1,7 +1,8 @@
 #pragma once
 // A 41x41 cloth (2 cm spacing) lying on the top of a frictionless kinematic 0.3 m sphere at the origin (or of a
 // standing capsule with the same top), its centre vertex on the vertical axis through the sphere's centre, where
-// it is pinned: nothing can turn the cloth about that axis (docs/design.md §4, "No spin from nothing").
+// it is pinned: nothing can turn the cloth about that axis (docs/design.md §4, "No spin from nothing"). Also a
+// standing cylinder (a field with edges) and the sphere as a grid field built from a mesh.
 
 #include <drape/drape.hpp>
 
@@ -39,6 +40,24 @@ struct SphereDrape {
     post.motion = Motion::Kinematic;
     post.angularVelocity = {0, 0, spin};
     return post;
+  }
+  /// A frictionless kinematic cylinder of the sphere's radius standing on the vertical axis, its flat top where
+  /// the sphere's top is: a field with edges, the cloth folding over its rim.
+  static Solid<Cylinder> standingCylinder() {
+    Solid<Cylinder> drum;
+    drum.shape.radius = kRadius;
+    drum.shape.halfHeight = kRadius;
+    drum.motion = Motion::Kinematic;
+    return drum;
+  }
+  /// The sphere as a grid field built from a closed mesh (an icosphere of 1 280 faces, 64 cells across): its
+  /// faces' normals are not radial, so the field turns the cloth by a little, as a user's mesh would.
+  static Solid<MeshShape> meshBall() {
+    static const auto grid = buildDistanceGrid(makeIcosphere(kRadius, 3), {64, 0, 0.02});
+    Solid<MeshShape> ball;
+    ball.shape = MeshShape{grid};
+    ball.motion = Motion::Kinematic;
+    return ball;
   }
 };
 
