@@ -13,6 +13,7 @@
 #include <drape/coupling/rigid_world.hpp>
 #include <drape/rigid/world.hpp>
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
