@@ -28,6 +28,7 @@ namespace {
 
 using namespace drape;
 using scenes::RestScene;
+using scenes::shiftOf;
 
 /// The RMS speed of all vertices at a quarter, half and all of the run; at the end, that of the vertices within
 /// kNear of the solid (the contacts and their neighbours, not the free skirt), and the lowest vertex (a cloth that
@@ -39,15 +40,6 @@ struct Reading {
   double lowest = 0;
   double msPerFrame = 0;  ///< the whole run's stepping time over its frames, landing included
 };
-
-/// Placement k's shift of the cloth's start (m): none for the first, then the points of an additive recurrence
-/// (the plastic number's, which spreads points evenly in the square) over a 2 cm cell centred on the start.
-Eigen::Vector2d shiftOf(int k) {
-  if (k == 0) return Eigen::Vector2d::Zero();
-  const double a = 0.7548776662466927, b = 0.5698402909980532;
-  auto frac = [](double v) { return v - std::floor(v); };
-  return 0.02 * Eigen::Vector2d(frac(0.5 + k * a), frac(0.5 + k * b)) - Eigen::Vector2d(0.01, 0.01);
-}
 
 /// At most this RMS speed of all vertices (m/s), a cloth is at rest (the target of the rest tests).
 constexpr double kAtRest = 1e-4;

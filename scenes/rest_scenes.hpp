@@ -28,6 +28,15 @@ inline const char* name(RestScene s) {
 
 using Distance = std::function<double(const Eigen::Vector3d&)>;
 
+/// Placement k's shift of a scene's start (m): none for the first, then the points of an additive recurrence
+/// (the plastic number's, which spreads points evenly in the square) over a 2 cm cell centred on the start.
+inline Eigen::Vector2d shiftOf(int k) {
+  if (k == 0) return Eigen::Vector2d::Zero();
+  const double a = 0.7548776662466927, b = 0.5698402909980532;
+  auto frac = [](double v) { return v - std::floor(v); };
+  return 0.02 * Eigen::Vector2d(frac(0.5 + k * a), frac(0.5 + k * b)) - Eigen::Vector2d(0.01, 0.01);
+}
+
 /// The RMS speed of the vertices within `reach` of the solid whose distance field is `distance` (0 if none is).
 template <class S> double rmsSpeedNear(const Solver<S>& solver, const Distance& distance, double reach) {
   double sum = 0;

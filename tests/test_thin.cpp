@@ -4,6 +4,8 @@
 
 #include <catch2/catch.hpp>
 
+#include <low_pinch.hpp>
+
 #include <memory>
 
 namespace {
@@ -79,23 +81,13 @@ TEMPLATE_TEST_CASE("a cloth pinched between the floor and a box lower than twice
   // it into velocity: the fastest vertex over the last half second was at 0.18-0.32 m/s (double) and
   // 0.36-1.21 m/s (float). Along the well-determined directions only, frictionless, it is at 0.8-2.1 mm/s: the
   // whole cloth still slides, smoothly, on what the first squeeze gave it (nothing frictionless takes that
-  // away). With friction the pinched cloth is at rest (at most 4e-6 m/s measured; 1e-3 is asserted).
+  // away). With friction the pinched cloth is at rest (at most 4e-6 m/s measured; 1e-3 is asserted). That holds
+  // from this place of the box, not from every place within 1 cm of it (docs/design.md, Known limits;
+  // bench/pinch_drift.cpp).
   const double friction = GENERATE(0.0, 0.5);
+  const double thickness = drape::Settings{}.thickness;
   for (const double gapInThicknesses : {1.9, 1.8, 1.6}) {
-    drape::Settings settings;
-    drape::SheetDesc grid;
-    grid.nx = grid.ny = 21;
-    grid.spacing = 0.02;
-    grid.placement.position = {0, 0, settings.thickness};
-    drape::Solver<S> cloth(std::make_shared<const drape::ClothAsset<S>>(drape::ClothAsset<S>::sheet(grid)), settings);
-    drape::Solid<drape::Plane> floor;
-    floor.staticFriction = floor.dynamicFriction = friction;
-    cloth.addSolid(floor);
-    drape::Solid<drape::Box> box;
-    box.shape.halfExtents = {0.08, 0.08, 0.04};
-    box.pose.position = {0.005, -0.003, gapInThicknesses * settings.thickness + 0.04};
-    box.staticFriction = box.dynamicFriction = friction;
-    cloth.addSolid(box);
+    drape::Solver<S> cloth = drape::scenes::makeLowPinch<S>(gapInThicknesses, friction);
     double fastest = 0, lowest = 1e9, highest = -1e9;
     for (int s = 0; s < 100; ++s) {
       cloth.step(0.01);
@@ -109,7 +101,7 @@ TEMPLATE_TEST_CASE("a cloth pinched between the floor and a box lower than twice
     INFO("friction " << friction << ", gap " << gapInThicknesses << " thicknesses: fastest vertex " << fastest
                      << " m/s over the last 0.5 s, z in [" << lowest << ", " << highest << "] m");
     CHECK(fastest <= (friction > 0 ? 1e-3 : 5e-3));
-    CHECK(lowest >= 0);                          // never through the floor
-    CHECK(highest <= 3 * settings.thickness);    // nor thrown up
+    CHECK(lowest >= 0);                // never through the floor
+    CHECK(highest <= 3 * thickness);  // nor thrown up
   }
 }
