@@ -258,7 +258,7 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
   }
 
   /// The farthest a free vertex travelled in the substep (h |v| after the update, which is (x - x_start) / h),
-  /// for continuous contact: the sum of the threads' largest, a bound on the largest.
+  /// for continuous contact: the largest over the threads, so the same on any number of them.
   S measureTravel(const S h) {
     DRAPE_OMP(single)
     travel_ = 0;
@@ -267,7 +267,7 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     teamForNoWait(vertexCount(), [&](Index b, Index e) {
       for (Index i = b; i < e; ++i) fastest = std::max(fastest, v[i].squaredNorm());
     });
-    teamAdd(travel_, h * std::sqrt(fastest));
+    teamMax(travel_, h * std::sqrt(fastest));
     DRAPE_OMP(barrier)
     return travel_;
   }

@@ -75,7 +75,7 @@ template <Scalar S> class ContactPasses {
   bool measuresDrift() const { return useBins_ && binsFresh_; }
   const Vec3<S>* binned() const { return bins_.binned(); }
   /// The velocity update's largest squared distance from the binned positions, on each thread.
-  void addUpdateDrift(S farSquared) { teamAdd(moveBound_, std::sqrt(farSquared)); }
+  void addUpdateDrift(S farSquared) { teamMax(moveBound_, std::sqrt(farSquared)); }
 
   /// All contacts of a substep with the solids of `compiled` (a tuple of vectors of CompiledSolid): the
   /// projections, then, where surfaces meet (a crease, a box corner, a cloth pinched between a ball and the
@@ -245,8 +245,9 @@ template <Scalar S> class ContactPasses {
   }
 
   /// One solid's vertex pass over ids[0, count), shared by the team. The counts and the move bound are added
-  /// once per thread (the sum of the threads' largest moves bounds the largest; only the bins read it, and the
-  /// contacts do not depend on it); the barrier after them lets every thread read the totals.
+  /// once per thread, the largest move kept as the largest over the threads (so the bins, and the kept clearances
+  /// that read their drift, do the same on any number of threads); the barrier after them lets every thread read
+  /// the totals.
   template <bool kSweep, class Solid, class Ids>
   void projectVertices(const Solid& solid, const PassInputs<S>& in, Ids ids, Index count, const Vec3<S>* binned,
                        S slack) {
@@ -263,7 +264,7 @@ template <Scalar S> class ContactPasses {
       teamAdd(stats_.vertexSweeps, share.swept);
       teamAdd(stats_.sweepContacts, share.sweptFound);
     }
-    teamAdd(moveBound_, share.moved);
+    teamMax(moveBound_, share.moved);
     DRAPE_OMP(barrier)
   }
 
@@ -273,7 +274,7 @@ template <Scalar S> class ContactPasses {
     teamForNoWait(Index(contacts_.size()), [&](Index b, Index e) {
       moved = projectOntoContactPlanes(b, e, contacts_, in.x, in.settleStart, binned);
     });
-    teamAdd(moveBound_, moved);
+    teamMax(moveBound_, moved);
     DRAPE_OMP(barrier)
     if (useBins_) {
       DRAPE_OMP(single)
@@ -294,7 +295,7 @@ template <Scalar S> class ContactPasses {
   std::vector<Index> nearVertices_, nearFaces_;  ///< what the bins found near the current solid
   std::vector<Index> every_;  ///< 0, 1, 2, ...: every vertex and face, for a solid that holds most of the cloth
   bool whole_ = false;        ///< the current solid visits every vertex and face (shared by the team)
-  S moveBound_ = 0;         ///< the passes' largest vertex moves, summed (shared by the team)
+  S moveBound_ = 0;         ///< the passes' largest distance from the binned positions (shared by the team)
   bool useBins_ = false;    ///< contacts with bounded solids go through the bins this substep
   bool binsFresh_ = false;  ///< the bins were built, and every move since is in their drift
 };

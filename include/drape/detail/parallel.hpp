@@ -79,6 +79,12 @@ template <class T> void teamAdd(T& total, T mine) {
   DRAPE_OMP(atomic)
   total += mine;
 }
+/// Raises a maximum the team shares to one thread's part, so that a bound read after the barrier is the largest
+/// over all the items, whatever the thread count (a sum of the threads' parts would grow with it).
+template <class T> void teamMax(T& most, T mine) {
+  DRAPE_OMP(critical(drape_team_max))
+  most = most < mine ? mine : most;
+}
 /// Calls f with each runtime flag as a std::bool_constant, so that a kernel templated on a scene's features is
 /// compiled once per combination and the choice is made once, outside its per-vertex loop:
 ///   withFlags([&](auto friction) { respond<decltype(friction)::value>(...); }, hasFriction);
