@@ -79,7 +79,8 @@ int main(int argc, char** argv) {
           int still = 0, unmoved = 0;
           double lowest = 1e9, highest = -1e9;
           for (int k = 0; k < places; ++k) {
-            const Reading r = precision == 0 ? run<float>(gap, friction, k, method) : run<double>(gap, friction, k, method);
+            const Reading r =
+                precision == 0 ? run<float>(gap, friction, k, method) : run<double>(gap, friction, k, method);
             fastest.push_back(r.fastest), moving.push_back(r.moving);
             still += r.fastest <= limit;
             unmoved += r.moving <= limit;
