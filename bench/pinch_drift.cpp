@@ -55,10 +55,6 @@ double median(std::vector<double> v) {
   return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
 }
 
-const char* name(CollisionMethod m) {
-  return m == CollisionMethod::Faces ? "faces" : m == CollisionMethod::Vertices ? "vertices" : "in-solve";
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -87,9 +83,9 @@ int main(int argc, char** argv) {
             lowest = std::min(lowest, r.lowest), highest = std::max(highest, r.highest);
           }
           std::printf("%-9s %-4.1f %-4.1f %-6s | %2d / %-3d %-9.2g %-9.2g | %2d / %-3d %-9.2g %-9.2g | %.2f to %.2f\n",
-                      name(method), friction, gap, precision == 0 ? "float" : "double", still, places, median(fastest),
-                      *std::max_element(fastest.begin(), fastest.end()), unmoved, places, median(moving),
-                      *std::max_element(moving.begin(), moving.end()), 1e3 * lowest, 1e3 * highest);
+                      toString(method), friction, gap, precision == 0 ? "float" : "double", still, places,
+                      median(fastest), *std::max_element(fastest.begin(), fastest.end()), unmoved, places,
+                      median(moving), *std::max_element(moving.begin(), moving.end()), 1e3 * lowest, 1e3 * highest);
         }
   return 0;
 }

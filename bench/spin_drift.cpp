@@ -4,10 +4,9 @@
 // Printed for every collision method, float and double, the sphere at rest and spinning at 2 rad/s, a standing
 // capsule with the same top (the skirt hangs down its side, curved about the axis only), a standing cylinder
 // with the same top (a field with edges: the cloth folds over its rim) and the sphere as a grid field built from a
-// mesh (whose faces' normals are not radial: it can turn the cloth by a little), at each
-// substep count given, with Settings::keepAngularMomentum off and on: L_z after the run, and L_z / I_z (the
-// cloth's turn, rad/s). The same cloth hanging from its pin with no solid at all shows the constraint solve's
-// share.
+// mesh (whose faces' normals are not radial: it can turn the cloth by a little), at each substep count given,
+// with Settings::keepAngularMomentum off and on: L_z after the run, and L_z / I_z (the cloth's turn, rad/s). The
+// same cloth hanging from its pin with no solid at all shows the constraint solve's share.
 // Run: build/bench/spin_drift [seconds, default 10] [substep counts..., default 2 10]
 #include <drape/drape.hpp>
 
