@@ -38,6 +38,10 @@ layout(location = DRAPE_U_BODY) uniform int body;  // the coupled body this soli
 #else
 const int body = -1;
 #endif
+#if !DRAPE_GUARD && DRAPE_SHAPE != DRAPE_SHAPE_SPHERE && DRAPE_SHAPE != DRAPE_SHAPE_CAPSULE
+layout(std430, binding = DRAPE_B_HELD) buffer Held { vec4 held[]; };
+layout(location = DRAPE_U_HELD_PLACE) uniform uint heldPlace;  // the solid's place + 1; 0: nothing held
+#endif
 
 const int kMaxCuts = DRAPE_MAX_CUTS;
 const int kMaxVertices = 2 * kMaxCuts + 6;
@@ -803,6 +807,25 @@ void main() {
   float qphi;
   if (!searchFace(x0, x1, x2, thickness, qb, qn, qp, qphi)) return;
   if (qphi >= thickness) return;
+#if DRAPE_SHAPE != DRAPE_SHAPE_SPHERE && DRAPE_SHAPE != DRAPE_SHAPE_CAPSULE
+  // The face's held point, where it is as deep as the search's within the search's tolerance (HeldPoints in
+  // include/drape/collision/response.hpp): a face parallel to a side or an edge of the solid is deepest along a
+  // segment, and the search's end on it follows the rounding.
+  if (heldPlace != 0u) {
+    const uint fi = first + gl_GlobalInvocationID.x;
+    const vec4 h = held[fi];
+    if (h.w == float(heldPlace)) {
+      precise const vec3 hp = x0 + h.y * (x1 - x0) + h.z * (x2 - x0);
+      vec3 hn;
+      const float hphi = sdf(hp, hn);
+      precise const vec3 e01 = x1 - x0, e12 = x2 - x1, e20 = x0 - x2;
+      const float extent = sqrt(max(max(dot3(e01, e01), dot3(e12, e12)), dot3(e20, e20)));
+      if (hphi < thickness && hphi <= qphi + DRAPE_HELD_POINT_SLACK * DRAPE_FACE_SEARCH_GAP * extent)
+        qb = h.xyz, qp = hp, qn = hn, qphi = hphi;
+    }
+    held[fi] = vec4(qb, float(heldPlace));
+  }
+#endif
 
   // Move the face's vertices (projectFaceContactsAs).
   precise const vec3 wb = vec3(a.w * qb.x, b.w * qb.y, c.w * qb.z);

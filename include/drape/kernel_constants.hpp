@@ -33,6 +33,9 @@ inline constexpr int kMaxCuts = 16;
 inline constexpr double kFaceSearchGap = 3e-4;
 /// A cut is kept while it is within this share of the tolerance of the model's minimum.
 inline constexpr double kCutSlack = 0.01;
+/// A face's held deepest point is kept while it is within this share of the search's tolerance of the search's
+/// answer (HeldPoints): wide enough for float's rounding of equally deep points, narrow enough to bias no push.
+inline constexpr double kHeldPointSlack = 0.01;
 /// A face whose sine of the angle between its edges from the first corner is below the root of this is flat for
 /// the closed-form nearest point: rounding (a fused multiply-add) can put it in the wrong Voronoi region.
 inline constexpr double kFlatSine2 = 1e-6;

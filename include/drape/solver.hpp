@@ -92,10 +92,12 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
   void keepStart() {
     startX_ = state_.x;
     startV_ = state_.v;
+    startHeld_ = passes_.heldPoints();
   }
   void restoreStart() {
     state_.x = startX_;
     state_.v = startV_;
+    passes_.restoreHeldPoints(startHeld_);
     passes_.positionsReplaced();
   }
   static void checkSettings(const Settings&) {}  // the CPU runs every valid setting
@@ -515,6 +517,7 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
   std::vector<Vec3<S>> xPrev_, xPredicted_;
   std::vector<Vec4<S>> packed_;   ///< (position, 0) of each vertex: what the constraint solve works on
   std::vector<Vec3<S>> startX_, startV_;  ///< the state at the start of a step that may be undone
+  std::vector<HeldPoint<S>> startHeld_;  ///< the faces' held deepest points then
   /// The stretch, shear and bending sets as the float SIMD kernels read them, with their lanes' inverse masses
   /// (gatherLaneMasses); the asset holds the topology only.
   DistanceBlocks<S> blocks_[3];

@@ -54,6 +54,7 @@ template <Scalar S> class ContactPasses {
   /// Sizes the records and the bins for a cloth of `vertexCount` vertices; cells of `cell` metres.
   void setTopology(const std::vector<std::array<Index, 3>>& triangles, Index vertexCount, S cell) {
     contacts_.resize(vertexCount);
+    held_.assign(triangles.size(), HeldPoint<S>{});
     bins_.setTopology(triangles, vertexCount, cell);
     every_.resize(std::max(std::size_t(vertexCount), triangles.size()));
     for (std::size_t k = 0; k < every_.size(); ++k) every_[k] = Index(k);
@@ -70,7 +71,14 @@ template <Scalar S> class ContactPasses {
   /// The positions were replaced: the bins no longer know where the vertices are.
   void positionsReplaced() { binsFresh_ = false; }
   /// A solid was added or replaced: the faces' kept clearances may belong to another solid now.
-  void solidsChanged() { ++solidsVersion_; }
+  void solidsChanged() {
+    ++solidsVersion_;
+    std::fill(held_.begin(), held_.end(), HeldPoint<S>{});  // a place may now hold another solid
+  }
+  /// The faces' held deepest points, which an undone step puts back (docs/design.md §3, "Ties between deepest
+  /// points").
+  const std::vector<HeldPoint<S>>& heldPoints() const { return held_; }
+  void restoreHeldPoints(const std::vector<HeldPoint<S>>& held) { held_ = held; }
   /// Whether the velocity update should measure how far the vertices got from where the bins took them.
   bool measuresDrift() const { return useBins_ && binsFresh_; }
   const Vec3<S>* binned() const { return bins_.binned(); }
@@ -218,7 +226,8 @@ template <Scalar S> class ContactPasses {
           bins_.noteDrift(projectFaceContacts<kCull, true, kSweep>(
               solid, thickness, in.pgdIterations, in.triangles, ItemList{whole_ ? every_.data() : nearFaces_.data()},
               whole_ ? Index(in.triangles.size()) : Index(nearFaces_.size()), x, w, contacts_, stats_,
-              bins_.binned(), in.exactGridSearch, in.sweep, in.ownNormals, in.keepTurn, skip));
+              bins_.binned(), in.exactGridSearch, in.sweep, in.ownNormals, in.keepTurn, skip,
+              HeldPoints<S>{held_.data(), std::int32_t(place)}));
         }
       }
     } else {
@@ -230,7 +239,8 @@ template <Scalar S> class ContactPasses {
         {
           const S moved = projectFaceContacts<kCull, false, kSweep>(
               solid, thickness, in.pgdIterations, in.triangles, AllItems{}, Index(in.triangles.size()), x, w,
-              contacts_, stats_, binned, in.exactGridSearch, in.sweep, in.ownNormals, in.keepTurn);
+              contacts_, stats_, binned, in.exactGridSearch, in.sweep, in.ownNormals, in.keepTurn, {},
+              HeldPoints<S>{held_.data(), std::int32_t(place)});
           if (useBins_) bins_.noteDrift(moved);
         }
       }
@@ -288,6 +298,7 @@ template <Scalar S> class ContactPasses {
   ContactBuffer<S> contacts_;
   CollisionStats stats_;
   std::vector<Clearances> clearances_;  ///< by the solid's place among all the solids
+  std::vector<HeldPoint<S>> held_;      ///< by face: where it was last deepest in a solid
   std::uint64_t solidsVersion_ = 0;
   bool keepClearances_ = false;  ///< this substep's passes may keep clearances (shared by the team)
   Clearances* kept_ = nullptr;   ///< the current solid's, or null (shared by the team)

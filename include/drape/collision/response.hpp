@@ -264,6 +264,28 @@ template <Scalar S> struct KeptClearance {
   S drift = 0;
 };
 
+/// Where each face was deepest in a solid the last time it touched one (ContactPasses; docs/design.md §3, "Ties
+/// between deepest points"): the barycentric weights and the solid's place among all the solids (-1: none). Where
+/// a face lies parallel to an edge or a side of the solid, its deepest points make a segment or a patch, and the
+/// search ends at whichever point its cuts reach first: the substep's rounding then moves the push, and with it
+/// which corners it moves, from one end to the other. A held point as deep as the search's, within a hundredth of
+/// the search's own tolerance (kHeldPointSlack), is kept instead.
+template <Scalar S> struct HeldPoint {
+  Vec3<S> barycentric = Vec3<S>::Zero();
+  std::int32_t place = -1;
+};
+template <Scalar S> struct HeldPoints {
+  HeldPoint<S>* points = nullptr;  ///< by face index; null: the pass holds nothing
+  std::int32_t place = -1;         ///< the solid's place among all the solids
+};
+
+/// Whether the face pass holds deepest points for a field: not on a ball or a capsule, whose fields have no flat
+/// stretch (a face is deepest where it is nearest the centre or the core, in closed form, or around a rod thinner
+/// than the face by the cutting planes, where holding a point let the GPU's face order carry the rod through a
+/// face), nor on a linear field, which has no face pass.
+template <class Field>
+inline constexpr bool kHoldsDeepestPoints = !requires { Field::kPointCore; } && !requires { Field::kSegmentCore; };
+
 /// With Settings::keepAngularMomentum (docs/design.md §4): a contact moved a vertex from `before` to `after`, out
 /// of a smooth solid, and leaves its velocity v to the response. Moved out along a ball's normal from radius r0 to
 /// r1 with its velocity unchanged, the vertex would gain m (r1 - r0) n x v of angular momentum about the centre;
@@ -567,13 +589,16 @@ VertexPassShare<S> projectVertexContacts(Index begin, Index end, const CompiledS
 /// With kSkip (a solid that does not move, with the bins on), a face whose kept clearance exceeds how far any
 /// vertex may be from its binned position is passed over, and every culled face's clearance is kept (KeptClearance).
 /// The bound grows with the pass's own moves, so the contacts are bit for bit those of the pass without it.
+///
+/// With kHold, a face in contact is pushed from its held point (HeldPoints) where that is as deep as the search's
+/// answer (within kHeldPointSlack of its tolerance), and the point it is pushed from is held for the next substep.
 template <bool kCull, bool kBody, bool kBoxed, bool kSweep, bool kOwnNormals = false, bool kSkip = false,
-          class Shape, Scalar S, class Ids>
+          bool kHold = false, class Shape, Scalar S, class Ids>
 S projectFaceContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, int pgdIterations,
                         const std::vector<std::array<Index, 3>>& triangles, Ids ids, Index count, Vec3<S>* x,
                         const S* invMass, ContactBuffer<S>& contacts, CollisionStats& stats, const Vec3<S>* binned,
                         bool exactSearch, const SweepInputs<S>& sweep, [[maybe_unused]] Vec3<S>* keepTurn = nullptr,
-                        [[maybe_unused]] KeptClearance<S> skip = {}) {
+                        [[maybe_unused]] KeptClearance<S> skip = {}, [[maybe_unused]] HeldPoints<S> held = {}) {
   static_assert(!kSkip || (kCull && kBoxed && !kSweep && !kBody), "a kept clearance is a cull's, on a still solid");
   S moved = 0;
   CollisionStats counts;  // kept apart from `stats`, which the moves below may alias
@@ -659,6 +684,20 @@ S projectFaceContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, int p
     if constexpr (kSkip) skip.clear[ids[f]] = -std::numeric_limits<S>::infinity();
     counts.sdfEvaluations += q.evaluations;
     if (q.phi >= thickness) continue;
+    if constexpr (kHold) {
+      HeldPoint<S>& h = held.points[ids[f]];
+      if (h.place == held.place) {
+        const Vec3<S> p = detail::pointOnFace(x[t[0]], x[t[1]], x[t[2]], h.barycentric[1], h.barycentric[2]);
+        Vec3<S> n;
+        const S phi = solid.sdf(p, n);
+        ++counts.sdfEvaluations;
+        const S extent = rootOf(std::max({(x[t[1]] - x[t[0]]).squaredNorm(), (x[t[2]] - x[t[1]]).squaredNorm(),
+                                          (x[t[0]] - x[t[2]]).squaredNorm()}));
+        if (phi < thickness && phi <= q.phi + S(constants::kHeldPointSlack * constants::kFaceSearchGap) * extent)
+          q = {h.barycentric, p, n, phi, q.evaluations};
+      }
+      h = {q.barycentric, held.place};
+    }
     const Vec3<S> wb(invMass[t[0]] * q.barycentric[0], invMass[t[1]] * q.barycentric[1],
                      invMass[t[2]] * q.barycentric[2]);
     const S denom = wb.dot(q.barycentric);
@@ -706,32 +745,36 @@ S projectFaceContacts(const CompiledSolid<Shape, S>& solid, S thickness, int pgd
                       const std::vector<std::array<Index, 3>>& triangles, Ids ids, Index count, Vec3<S>* x,
                       const S* invMass, ContactBuffer<S>& contacts, CollisionStats& stats, const Vec3<S>* binned,
                       bool exactSearch = true, const SweepInputs<S>& sweep = {}, bool ownNormals = false,
-                      Vec3<S>* keepTurn = nullptr, KeptClearance<S> skip = {}) {
+                      Vec3<S>* keepTurn = nullptr, KeptClearance<S> skip = {}, HeldPoints<S> held = {}) {
   const bool body = solid.motion.body >= 0;
-  if constexpr (kCull && kBoxed && !kSweep) {
-    if (skip.clear != nullptr && !body) {
-      if constexpr (kSmoothField<Shape, S>) {
-        if (ownNormals)  // the corners' own normals change the records, not which faces are culled
-          return projectFaceContactsAs<kCull, false, kBoxed, kSweep, true, true>(
-              solid, thickness, pgdIterations, triangles, ids, count, x, invMass, contacts, stats, binned,
-              exactSearch, sweep, keepTurn, skip);
+  constexpr bool kMayHold = kHoldsDeepestPoints<Sdf<Shape, S>>;
+  return withFlags([&](auto holdFlag) {
+    constexpr bool kHold = kMayHold && holdFlag();
+    if constexpr (kCull && kBoxed && !kSweep) {
+      if (skip.clear != nullptr && !body) {
+        if constexpr (kSmoothField<Shape, S>) {
+          if (ownNormals)  // the corners' own normals change the records, not which faces are culled
+            return projectFaceContactsAs<kCull, false, kBoxed, kSweep, true, true, kHold>(
+                solid, thickness, pgdIterations, triangles, ids, count, x, invMass, contacts, stats, binned,
+                exactSearch, sweep, keepTurn, skip, held);
+        }
+        return projectFaceContactsAs<kCull, false, kBoxed, kSweep, false, true, kHold>(
+            solid, thickness, pgdIterations, triangles, ids, count, x, invMass, contacts, stats, binned,
+            exactSearch, sweep, keepTurn, skip, held);
       }
-      return projectFaceContactsAs<kCull, false, kBoxed, kSweep, false, true>(
-          solid, thickness, pgdIterations, triangles, ids, count, x, invMass, contacts, stats, binned, exactSearch,
-          sweep, keepTurn, skip);
     }
-  }
-  if constexpr (kSmoothField<Shape, S>) {
-    if (ownNormals && !body)
-      return projectFaceContactsAs<kCull, false, kBoxed, kSweep, true>(solid, thickness, pgdIterations, triangles,
-                                                                       ids, count, x, invMass, contacts, stats,
-                                                                       binned, exactSearch, sweep, keepTurn);
-  }
-  return withFlags([&](auto isBody) {
-    return projectFaceContactsAs<kCull, isBody(), kBoxed, kSweep>(solid, thickness, pgdIterations, triangles, ids,
-                                                                  count, x, invMass, contacts, stats, binned,
-                                                                  exactSearch, sweep);
-  }, body);
+    if constexpr (kSmoothField<Shape, S>) {
+      if (ownNormals && !body)
+        return projectFaceContactsAs<kCull, false, kBoxed, kSweep, true, false, kHold>(
+            solid, thickness, pgdIterations, triangles, ids, count, x, invMass, contacts, stats, binned,
+            exactSearch, sweep, keepTurn, KeptClearance<S>{}, held);
+    }
+    return withFlags([&](auto isBody) {
+      return projectFaceContactsAs<kCull, isBody(), kBoxed, kSweep, false, false, kHold>(
+          solid, thickness, pgdIterations, triangles, ids, count, x, invMass, contacts, stats, binned, exactSearch,
+          sweep, static_cast<Vec3<S>*>(nullptr), KeptClearance<S>{}, held);
+    }, body);
+  }, kMayHold && held.points != nullptr);
 }
 
 

@@ -48,6 +48,8 @@ enum Binding : unsigned {
   // Continuous contact's friction guard (only with continuous contact, friction and faces):
   kGuardFrom = 24,        ///< vec4 per vertex: the position the contact passes left, before friction
   kGuardMarks = 25,       ///< uint per vertex: 1 where a face the guard caught goes back to kGuardFrom
+  kHeld = 26,             ///< vec4 per face, colour by colour: where it was last deepest in a solid (barycentric),
+                          ///<   w = that solid's place + 1, 0 for none (HeldPoints)
 };
 
 /// Uniform locations (set per dispatch with glProgramUniform*).
@@ -82,6 +84,7 @@ enum Uniform : int {
   kBoxLow = 28,         ///< vec3: the solid's bounding box (the cloth's local frame), outside which phi is at least
   kBoxHigh = 29,        ///<   the distance to the box (placeBounds); +-FLT_MAX for an unbounded solid
   kKeepVelocity = 30,   ///< float: the share of its velocity a free vertex keeps in a substep, exp(-airDamping h)
+  kHeldPlace = 31,      ///< uint: the face pass's solid's place + 1, 0 where the pass holds no deepest points
   kShape = 32,  ///< vec4[5] (locations 32-36): the solid's field, packed by packShape (gpu/shapes.hpp)
 };
 
@@ -256,6 +259,8 @@ inline std::string preamble(const std::string& defines = {}) {
   s += define("DRAPE_B_FLAGS", kFlags);
   s += define("DRAPE_B_GUARD_FROM", kGuardFrom);
   s += define("DRAPE_B_GUARD_MARKS", kGuardMarks);
+  s += define("DRAPE_B_HELD", kHeld);
+  s += define("DRAPE_U_HELD_PLACE", kHeldPlace);
   s += define("DRAPE_U_SLACK", kSlack);
   s += define("DRAPE_U_PASS", kPass);
   s += define("DRAPE_U_FRESH", kFresh);
@@ -273,6 +278,7 @@ inline std::string preamble(const std::string& defines = {}) {
   s += define("DRAPE_EIGEN_NEGLIGIBLE", constants::kEigenNegligible);
   s += define("DRAPE_MAX_CUTS", constants::kMaxCuts);
   s += define("DRAPE_FACE_SEARCH_GAP", constants::kFaceSearchGap);
+  s += define("DRAPE_HELD_POINT_SLACK", constants::kHeldPointSlack);
   s += define("DRAPE_CUT_SLACK", constants::kCutSlack);
   s += define("DRAPE_FLAT_SINE2", constants::kFlatSine2);
   s += define("DRAPE_CORNER_CULL_SLACK", constants::kCornerCullSlack);

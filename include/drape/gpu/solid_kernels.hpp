@@ -154,13 +154,16 @@ class SolidKernels {
     else k.dispatch(vertexCount);
   }
 
-  /// One curved solid's face pass (projectFaceContacts), colour by colour.
+  /// One curved solid's face pass (projectFaceContacts), colour by colour. `heldPlace`: the solid's place among all
+  /// the solids + 1, whose held deepest points the pass reads and writes (layout::kHeld), 0 for none.
   void facePass(const SolidPass& p, float thickness, int pgdIterations, const std::vector<std::size_t>& colourOffsets,
-                const Eigen::Vector2f& sweep = Eigen::Vector2f::Zero()) const {
+                const Eigen::Vector2f& sweep = Eigen::Vector2f::Zero(), unsigned heldPlace = 0) const {
     const ShapeKernels& ks = kernels_[p.code];
     const bool body = p.motion.body >= 0, swept = sweep.y() > 0;
     const Program& k = swept ? (body ? ks.sweepFacesBody : ks.sweepFaces) : (body ? ks.facesBody : ks.faces);
     setUniforms(k, p, thickness);
+    if (p.code != layout::kSphere && p.code != layout::kCapsule)  // as kHoldsDeepestPoints
+      k.set(layout::kHeldPlace, heldPlace);
     if (swept) k.set(layout::kSweep, sweep.x(), sweep.y());
     glProgramUniform1i(k.id(), layout::kPgdIterations, pgdIterations);
     for (std::size_t c = 0; c + 1 < colourOffsets.size(); ++c) {

@@ -154,6 +154,7 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
     const FaceColours coloured = gpu::colourFaces(asset_->triangles, vertexCount());
     faceColourOffsets_ = coloured.offsets;
     faces_.assign(coloured.faces);
+    held_.assign(std::vector<layout::Vertex>(coloured.faces.size(), layout::Vertex{0, 0, 0, 0}));
   }
 
   // --- the front end's hooks (SolverFront) ------------------------------------------------------------------
@@ -164,15 +165,17 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
     context_->makeCurrent();
     copyVertices(positions_, keptPositions_);
     copyVertices(velocities_, keptVelocities_);
+    copyVertices(held_, keptHeld_, held_.size());
   }
   void restoreStart() {
     context_->makeCurrent();
     copyVertices(keptPositions_, positions_);
     copyVertices(keptVelocities_, velocities_);
+    copyVertices(keptHeld_, held_, held_.size());
     fresh_ = false;
   }
-  void copyVertices(const Buffer<layout::Vertex>& from, Buffer<layout::Vertex>& to) {
-    const std::size_t n = state_.x.size();
+  void copyVertices(const Buffer<layout::Vertex>& from, Buffer<layout::Vertex>& to, std::size_t count = 0) {
+    const std::size_t n = count > 0 ? count : state_.x.size();
     if (to.size() != n) to.assign(std::vector<layout::Vertex>(n));
     glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
     glCopyNamedBufferSubData(from.id(), to.id(), 0, 0, GLsizeiptr(n * sizeof(layout::Vertex)));
@@ -202,6 +205,10 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
   template <class Shape> void solidSet(Index k) {
     kernels_.upload(std::get<std::vector<CompiledSolid<Shape, float>>>(compiled_)[std::size_t(k)]);
     kernels_.dropUnused();
+    if (held_.size() > 0) {  // a place may now hold another solid: nothing held
+      glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+      glClearNamedBufferData(held_.id(), GL_R32F, GL_RED, GL_FLOAT, nullptr);
+    }
   }
 
   /// Moves the local origin after the cloth (SolverFront::moveOrigin). The centre is summed on the GPU.
@@ -274,7 +281,7 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
   /// `h`: the substep, for continuous contact (0 for none: the in-solve method's contacts).
   void projectAll(bool faces, float h = 0.0f) {
     faces = faces && settings_.collisionMethod != CollisionMethod::Vertices;
-    if (faces) faces_.bind(layout::kFaces);
+    if (faces) faces_.bind(layout::kFaces), held_.bind(layout::kHeld);
     const float thickness = float(settings_.thickness);
     const auto n = unsigned(vertexCount());
     const float gate = float(constants::kSweepGate) * thickness;
@@ -284,7 +291,8 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
           sweep_ && h > 0.0f && passes_[k].curved ? Eigen::Vector2f(h, gate * gate) : Eigen::Vector2f::Zero();
       kernels_.vertexPass(passes_[k], thickness, n, k == 0, -1, 0.0f, sweep);
       if (faces && passes_[k].curved)
-        kernels_.facePass(passes_[k], thickness, settings_.pgdIterations, faceColourOffsets_, sweep);
+        kernels_.facePass(passes_[k], thickness, settings_.pgdIterations, faceColourOffsets_, sweep,
+                          unsigned(k + 1));
     }
     if (!reconcile_) return;
     settle(-1);
@@ -528,6 +536,7 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
   Buffer<layout::PinSlot> pinSlots_;
   Buffer<float> pinLambdas_;
   Buffer<std::array<std::uint32_t, 4>> faces_;  ///< the faces, colour by colour (colourFaces)
+  Buffer<layout::Vertex> held_, keptHeld_;      ///< per face as faces_: its held deepest point (layout::kHeld)
   std::vector<std::size_t> faceColourOffsets_;   ///< colour c is faces [offsets[c], offsets[c + 1])
   Buffer<layout::Vertex> positions_, velocities_, predicted_, packed_, start_, reduction_;
   Buffer<layout::Vertex> keptPositions_, keptVelocities_;  ///< an undoable step's start (keepStart)
