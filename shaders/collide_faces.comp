@@ -38,7 +38,7 @@ layout(location = DRAPE_U_BODY) uniform int body;  // the coupled body this soli
 #else
 const int body = -1;
 #endif
-#if !DRAPE_GUARD && DRAPE_SHAPE != DRAPE_SHAPE_SPHERE && DRAPE_SHAPE != DRAPE_SHAPE_CAPSULE
+#if !DRAPE_GUARD && DRAPE_HOLDS_DEEPEST_POINTS
 layout(std430, binding = DRAPE_B_HELD) buffer Held { vec4 held[]; };
 layout(location = DRAPE_U_HELD_PLACE) uniform uint heldPlace;  // the solid's place + 1; 0: nothing held
 #endif
@@ -807,7 +807,7 @@ void main() {
   float qphi;
   if (!searchFace(x0, x1, x2, thickness, qb, qn, qp, qphi)) return;
   if (qphi >= thickness) return;
-#if DRAPE_SHAPE != DRAPE_SHAPE_SPHERE && DRAPE_SHAPE != DRAPE_SHAPE_CAPSULE
+#if DRAPE_HOLDS_DEEPEST_POINTS
   // The face's held point, where it is as deep as the search's within the search's tolerance (HeldPoints in
   // include/drape/collision/response.hpp): a face parallel to a side or an edge of the solid is deepest along a
   // segment, and the search's end on it follows the rounding.

@@ -255,6 +255,148 @@ TEST_CASE("collide_faces: the GPU face pass against projectFaceContacts, colour 
   }
 }
 
+TEST_CASE("collide_faces: the held deepest points read and written over two passes as the CPU does", "[gpu]") {
+  // A level cloth 2 mm inside a box's top: over the top every point of a face is as deep, so a face in contact
+  // takes the point it holds (HeldPoints, docs/design.md §3 "Ties between deepest points"), seeded here at random,
+  // and pushes its corners by that point's weights. Beside the top's edges the seeded point is shallower than the
+  // search's and is replaced. Two passes, the second on the held points the first wrote, each side on its own
+  // positions, put back on the level.
+  drape::test::gpuContext().makeCurrent();
+  const auto asset = kernelSheet();
+  // No vertex fixed, so that every face in contact moves a corner and counts as a contact.
+  const auto state = drape::ClothState<float>::fromAsset(asset, 0.1);
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  for (const auto& p : state.x) centre += p.cast<double>() / double(state.x.size());
+  const double level = state.x[0].z();
+  for (const auto& p : state.x) REQUIRE(p.z() == state.x[0].z());
+  drape::Solid<drape::Box> block{drape::Box{{0.1, 0.08, 0.05}}};
+  block.pose.position = state.origin + centre + Eigen::Vector3d(0.013, -0.007, level - 0.05 + 0.002);
+  block.staticFriction = 0.3;
+  const auto solid = drape::detail::compileSolid<drape::Box, float>(block, state.origin);
+  const float thickness = 0.005f;
+  const int iterations = 12;
+  const auto coloured = drape::gpu::colourFaces(asset.triangles, asset.vertexCount());
+  std::vector<std::vector<Index>> ids;
+  for (std::size_t c = 0; c + 1 < coloured.offsets.size(); ++c) ids.push_back(colourFaceIds(asset, coloured, c));
+
+  // Seeded held points: the same floats on both sides, by face on the CPU, by place in the colour order on the GPU.
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> u(0.05f, 0.45f);
+  std::vector<drape::HeldPoint<float>> held(asset.triangles.size());
+  for (auto& h : held) {
+    const float b1 = u(rng), b2 = u(rng);
+    h = {Vec3<float>(1 - b1 - b2, b1, b2), 0};
+  }
+  std::vector<layout::Vertex> gpuHeld;
+  for (const auto& list : ids)
+    for (Index f : list) {
+      const auto& b = held[std::size_t(f)].barycentric;
+      gpuHeld.push_back({b.x(), b.y(), b.z(), 1.0f});  // the solid's place + 1
+    }
+
+  auto cpuPass = [&](std::vector<Vec3<float>>& x, drape::HeldPoints<float> hold, drape::CollisionStats& stats) {
+    drape::ContactBuffer<float> contacts;
+    contacts.resize(asset.vertexCount());
+    contacts.begin();
+    for (const auto& list : ids)
+      drape::projectFaceContacts<true>(solid, thickness, iterations, asset.triangles, drape::ItemList{list.data()},
+                                       Index(list.size()), x.data(), state.invMass.data(), contacts, stats,
+                                       x.data(), true, {}, false, static_cast<Vec3<float>*>(nullptr), {}, hold);
+  };
+
+  drape::gpu::Buffer<layout::Vertex> gx(gpuVertices(state.x, state.invMass));
+  drape::gpu::Buffer<layout::Contact> gc(std::vector<layout::Contact>(state.x.size(), layout::Contact{}));
+  drape::gpu::Buffer<std::array<std::uint32_t, 4>> gf(coloured.faces);
+  drape::gpu::Buffer<layout::Vertex> gh(gpuHeld);
+  gx.bind(layout::kPositions);
+  gc.bind(layout::kContacts);
+  gf.bind(layout::kFaces);
+  gh.bind(layout::kHeld);
+  drape::gpu::Program k("collide_faces", drape::gpu::shaders::collide_faces, drape::gpu::shapeDefine<drape::Box>());
+  k.set(layout::kThickness, thickness);
+  drape::gpu::setShape(k.id(), drape::gpu::packShape(solid.sdf));
+  k.set(layout::kSolidCentre, solid.motion.centre.x(), solid.motion.centre.y(), solid.motion.centre.z());
+  k.set(layout::kSolidLinear, 0.0f, 0.0f, 0.0f);
+  k.set(layout::kSolidAngular, 0.0f, 0.0f, 0.0f);
+  glProgramUniform1i(k.id(), layout::kPgdIterations, iterations);
+  glProgramUniform2f(k.id(), layout::kFriction, solid.motion.staticFriction, solid.motion.dynamicFriction);
+  k.set(layout::kBoxLow, solid.boxLow.x(), solid.boxLow.y(), solid.boxLow.z());
+  k.set(layout::kBoxHigh, solid.boxHigh.x(), solid.boxHigh.y(), solid.boxHigh.z());
+  k.set(layout::kHeldPlace, 1u);
+  auto gpuPass = [&] {
+    gc.write(std::vector<layout::Contact>(state.x.size(), layout::Contact{}));
+    for (std::size_t c = 0; c + 1 < coloured.offsets.size(); ++c) {
+      k.set(layout::kFirst, unsigned(coloured.offsets[c]));
+      k.set(layout::kCount, unsigned(coloured.offsets[c + 1] - coloured.offsets[c]));
+      k.dispatch(coloured.offsets[c + 1] - coloured.offsets[c]);
+    }
+  };
+
+  std::vector<Vec3<float>> x = state.x;
+  for (int pass = 0; pass < 2; ++pass) {
+    INFO("pass " << pass);
+    const std::vector<drape::HeldPoint<float>> before = held;
+    const std::vector<Vec3<float>> start = x;
+    drape::CollisionStats stats, plainStats;
+    cpuPass(x, drape::HeldPoints<float>{held.data(), 0}, stats);
+    // The same pass without held points: the meter that they were taken.
+    std::vector<Vec3<float>> plain = start;
+    cpuPass(plain, {}, plainStats);
+    gpuPass();
+    const auto gpuX = gx.read();
+    const auto gpuH = gh.read();
+    std::vector<Vec3<float>> gpuPositions(x.size());
+    for (std::size_t i = 0; i < x.size(); ++i) gpuPositions[i] = {gpuX[i].x, gpuX[i].y, gpuX[i].z};
+
+    // Each face is visited once a pass, and one in contact writes the point it pushed from: the search's where it
+    // refused the held point.
+    int replaced = 0;
+    std::size_t g = 0;
+    double worstHeld = 0;
+    for (const auto& list : ids)
+      for (Index f : list) {
+        const auto& h = held[std::size_t(f)];
+        const auto& b = before[std::size_t(f)];
+        if (h.barycentric != b.barycentric) ++replaced;
+        const layout::Vertex& hg = gpuH[g++];
+        CHECK(hg.w == float(h.place + 1));
+        worstHeld = std::max(worstHeld, double((Vec3<float>(hg.x, hg.y, hg.z) - h.barycentric).cwiseAbs().maxCoeff()));
+      }
+    const int taken = int(stats.faceContacts) - replaced;
+    INFO(stats.faceContacts << " face contacts; " << taken << " held points taken, " << replaced << " replaced");
+    REQUIRE(stats.faceContacts >= 100);
+    // The first colour's faces over the top are level when their turn comes (later colours share a corner that
+    // an earlier face moved), so each of them takes its held point: the seeded one, then the one the first pass
+    // wrote.
+    int firstOverTop = 0;
+    const Eigen::Vector3d top = block.pose.position - state.origin;
+    for (Index f : ids[0]) {
+      bool over = true;
+      for (Index v : asset.triangles[std::size_t(f)])
+        over = over && std::abs(start[std::size_t(v)].x() - top.x()) < 0.1 - 1e-3 &&
+               std::abs(start[std::size_t(v)].y() - top.y()) < 0.08 - 1e-3;
+      firstOverTop += over;
+    }
+    INFO(firstOverTop << " faces of the first colour over the top");
+    CHECK(firstOverTop >= 10);
+    CHECK(taken >= firstOverTop);
+    CHECK(replaced >= 10);  // beside the top's edges, and where an earlier face tilted it: the search's
+    // The held points change where the faces push their corners by millimetres.
+    CHECK(drape::test::largestDifference(plain, x) > 1e-3);
+    // The searches end on certificates a rounding apart: a few ulp of the cloth's positions and weights.
+    CHECK(drape::test::largestDifference(gpuPositions, x) <= 4 * 1.2e-7 * 0.6);
+    CHECK(worstHeld <= 1e-5);
+    std::printf("[gpu held] pass %d: %lld face contacts, %d held points taken, %d replaced; largest gaps: "
+                "position %.2e m, held weight %.2e\n",
+                pass, static_cast<long long>(stats.faceContacts), taken, replaced,
+                drape::test::largestDifference(gpuPositions, x), worstHeld);
+    // The next pass from the level again, each side from where its own pass left the cloth across it.
+    std::vector<layout::Vertex> down = gpuX;
+    for (std::size_t i = 0; i < x.size(); ++i) x[i].z() = state.x[i].z(), down[i].z = state.x[i].z();
+    gx.write(down);
+  }
+}
+
 TEST_CASE("collide_faces on grid fields: the GPU's branch and bound against the CPU's, colour by colour", "[gpu]") {
   // Meshes with an edge and a corner up, a concave edge and a curved surface, turned, pressed 2 cm into the cloth.
   const int which = GENERATE(0, 1, 2);

@@ -279,13 +279,6 @@ template <Scalar S> struct HeldPoints {
   std::int32_t place = -1;         ///< the solid's place among all the solids
 };
 
-/// Whether the face pass holds deepest points for a field: not on a ball or a capsule, whose fields have no flat
-/// stretch (a face is deepest where it is nearest the centre or the core, in closed form, or around a rod thinner
-/// than the face by the cutting planes, where holding a point let the GPU's face order carry the rod through a
-/// face), nor on a linear field, which has no face pass.
-template <class Field>
-inline constexpr bool kHoldsDeepestPoints = !requires { Field::kPointCore; } && !requires { Field::kSegmentCore; };
-
 /// With Settings::keepAngularMomentum (docs/design.md §4): a contact moved a vertex from `before` to `after`, out
 /// of a smooth solid, and leaves its velocity v to the response. Moved out along a ball's normal from radius r0 to
 /// r1 with its velocity unchanged, the vertex would gain m (r1 - r0) n x v of angular momentum about the centre;

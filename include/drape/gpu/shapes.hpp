@@ -36,7 +36,8 @@ template <class Shape> constexpr layout::ShapeCode shapeCode() {
 /// (kSmoothField).
 template <class Shape> std::string shapeDefine() {
   return "#define DRAPE_SHAPE " + std::to_string(int(shapeCode<Shape>())) + "\n#define DRAPE_SMOOTH_FIELD " +
-         std::to_string(int(kSmoothField<Shape, float>)) + "\n";
+         std::to_string(int(kSmoothField<Shape, float>)) + "\n#define DRAPE_HOLDS_DEEPEST_POINTS " +
+         std::to_string(int(kHoldsDeepestPoints<Sdf<Shape, float>>)) + "\n";
 }
 
 using PackedShape = std::array<Eigen::Vector4f, 5>;

@@ -41,6 +41,7 @@ class SolidKernels {
       k.vertices = Program("collide_vertices", shaders::collide_vertices, define);
       k.repel = Program("repel", shaders::repel, define);
       if constexpr (!Sdf<Shape, float>::kLinear) k.faces = Program("collide_faces", shaders::collide_faces, define);
+      k.holds = kHoldsDeepestPoints<Sdf<Shape, float>>;
       k.ready = true;
     }
     if (body && !k.bodyReady) {  // a coupled body's twins, which keep where each push acts
@@ -162,8 +163,7 @@ class SolidKernels {
     const bool body = p.motion.body >= 0, swept = sweep.y() > 0;
     const Program& k = swept ? (body ? ks.sweepFacesBody : ks.sweepFaces) : (body ? ks.facesBody : ks.faces);
     setUniforms(k, p, thickness);
-    if (p.code != layout::kSphere && p.code != layout::kCapsule)  // as kHoldsDeepestPoints
-      k.set(layout::kHeldPlace, heldPlace);
+    if (ks.holds) k.set(layout::kHeldPlace, heldPlace);
     if (swept) k.set(layout::kSweep, sweep.x(), sweep.y());
     glProgramUniform1i(k.id(), layout::kPgdIterations, pgdIterations);
     for (std::size_t c = 0; c + 1 < colourOffsets.size(); ++c) {
@@ -218,6 +218,7 @@ class SolidKernels {
     Program guard;                               ///< the friction guard (compileGuardFor)
     Program sweepVertices, sweepFaces, sweepVerticesBody, sweepFacesBody;  ///< with the path searches (compileSweepFor)
     bool ready = false, bodyReady = false, guardReady = false, sweepReady = false, sweepBodyReady = false;
+    bool holds = false;  ///< the face pass holds deepest points (kHoldsDeepestPoints): it takes layout::kHeldPlace
   };
   std::array<ShapeKernels, 8> kernels_;  ///< by layout::ShapeCode
   struct ShapeData {

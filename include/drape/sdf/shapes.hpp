@@ -16,6 +16,14 @@ namespace drape {
 template <class Shape, Scalar S> struct Sdf;
 /// A field with no edges (its Sdf declares kSmooth): the gradient turns smoothly along the surface and never flips.
 template <class Shape, Scalar S> inline constexpr bool kSmoothField = requires { Sdf<Shape, S>::kSmooth; };
+/// Whether the face pass holds deepest points for a field: not on a ball or a capsule, whose fields have no flat
+/// stretch (a face is deepest where it is nearest the centre or the core, in closed form, or around a rod thinner
+/// than the face by the cutting planes, where holding a point let the GPU's face order carry the rod through a
+/// face), nor on a linear field, which has no face pass. The GLSL face pass reads it as
+/// DRAPE_HOLDS_DEEPEST_POINTS (gpu/shapes.hpp).
+template <class Field>
+inline constexpr bool kHoldsDeepestPoints = !requires { Field::kPointCore; } && !requires { Field::kSegmentCore; };
+
 
 template <Scalar S> struct Sdf<Plane, S> {
   static constexpr bool kLinear = true;  ///< phi is linear: its minimum over a face is at a vertex
