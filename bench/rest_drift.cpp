@@ -13,7 +13,8 @@
 // The largest strain of the cloth's stretch edges at the end is read beside the speeds: at few substeps the
 // constraint passes leave a hanging cloth stretched, most where it hangs from the solid.
 // Run: build/bench/rest_drift [--iterations N, default 1] [--air-damping C in 1/s, default 0] [--placements P,
-//      default 1] [--rings R, Settings::propagationRings, default 1] [--scenes ridge,corner,rod,ball]
+//      default 1] [--rings R, Settings::propagationRings, default 1] [--weight W, Settings::propagationWeight,
+//      default 0.5] [--scenes ridge,corner,rod,ball]
 //      [--methods faces,in-solve,vertices] [seconds, default 20] [substep counts..., default 2]
 #include <drape/drape.hpp>
 
@@ -51,13 +52,14 @@ constexpr double kAtRest = 1e-4;
 
 template <class S>
 Reading run(RestScene scene, CollisionMethod method, int substeps, int iterations, double airDamping, int rings,
-            double seconds, int placement = 0) {
+            double weight, double seconds, int placement = 0) {
   scenes::Distance distance;
   Solver<S> solver = scenes::makeRestScene<S>(scene, method, substeps, distance, shiftOf(placement));
   Settings settings = solver.settings();
   settings.iterationCount = iterations;
   settings.airDamping = airDamping;
   settings.propagationRings = rings;
+  settings.propagationWeight = weight;
   solver.setSettings(settings);
   const int frames = int(seconds * 60 + 0.5);
   const int marks[3] = {frames / 4, frames / 2, frames};
@@ -82,7 +84,7 @@ Reading run(RestScene scene, CollisionMethod method, int substeps, int iteration
 
 int main(int argc, char** argv) {
   int iterations = 1, placements = 1, rings = Settings{}.propagationRings, first = 1;
-  double airDamping = 0;
+  double airDamping = 0, weight = Settings{}.propagationWeight;
   std::vector<RestScene> scenesRun = {RestScene::Ridge, RestScene::Corner, RestScene::Rod, RestScene::Ball};
   std::vector<CollisionMethod> methods = {CollisionMethod::Faces, CollisionMethod::InSolve, CollisionMethod::Vertices};
   // A comma-separated list's items.
@@ -105,6 +107,8 @@ int main(int argc, char** argv) {
       placements = std::atoi(argv[first + 1]);
     } else if (option == "--rings") {
       rings = std::atoi(argv[first + 1]);
+    } else if (option == "--weight") {
+      weight = std::atof(argv[first + 1]);
     } else if (option == "--scenes") {
       scenesRun.clear();
       for (const std::string& item : itemsOf(argv[first + 1])) {
@@ -127,8 +131,8 @@ int main(int argc, char** argv) {
       }
     } else {
       std::fprintf(stderr,
-                   "rest_drift: unknown option %s (--iterations, --air-damping, --placements, --rings, --scenes, "
-                   "--methods)\n",
+                   "rest_drift: unknown option %s (--iterations, --air-damping, --placements, --rings, --weight, "
+                   "--scenes, --methods)\n",
                    option.c_str());
       return 2;
     }
@@ -139,6 +143,10 @@ int main(int argc, char** argv) {
   }
   if (rings < 0 || rings > 8) {
     std::fprintf(stderr, "rest_drift: --rings must be in [0, 8]\n");
+    return 2;
+  }
+  if (!(weight >= 0) || weight > 1) {
+    std::fprintf(stderr, "rest_drift: --weight must be in [0, 1]\n");
     return 2;
   }
   if (placements < 1 || placements > 1000) {
@@ -164,23 +172,23 @@ int main(int argc, char** argv) {
     }
   if (placements > 1) {
     std::printf(
-        "%d solver iteration(s) per substep, air damping %g/s, %d propagation ring(s), %d placements of the cloth. "
-        "After %g s: how "
+        "%d solver iteration(s) per substep, air damping %g/s, %d propagation ring(s) of weight %g, %d placements of "
+        "the cloth. After %g s: how "
         "many are at rest (RMS speed of all vertices at most %g m/s), the median and the worst RMS speed "
         "(m/s), the median within 2 cm of the solid, the median and the worst largest strain, and the median "
         "time per frame (ms, landing included).\n\n",
-        iterations, airDamping, rings, placements, seconds, kAtRest);
+        iterations, airDamping, rings, weight, placements, seconds, kAtRest);
     std::printf(
         "| scene | substeps | method | scalar | at rest | median | worst | median within 2 cm | strain | "
         "ms per frame |\n");
     std::printf("|---|---:|---|---|---:|---:|---:|---:|---:|---:|\n");
   } else {
     std::printf(
-        "%d solver iteration(s) per substep, air damping %g/s, %d propagation ring(s). RMS speed of all vertices "
-        "(m/s) after %g, %g "
+        "%d solver iteration(s) per substep, air damping %g/s, %d propagation ring(s) of weight %g. RMS speed of all "
+        "vertices (m/s) after %g, %g "
         "and %g s; at the end the lowest vertex (m) and the largest strain; the time per frame (ms, landing "
         "included).\n\n",
-        iterations, airDamping, rings, seconds / 4, seconds / 2, seconds);
+        iterations, airDamping, rings, weight, seconds / 4, seconds / 2, seconds);
     std::printf(
         "| scene | substeps | method | scalar | RMS at %g s | at %g s | at %g s | within 2 cm at %g s | lowest | "
         "strain | ms per frame |\n",
@@ -197,8 +205,8 @@ int main(int argc, char** argv) {
         for (bool isFloat : {true, false}) {
           std::vector<Reading> readings;
           for (int k = 0; k < placements; ++k)
-            readings.push_back(isFloat ? run<float>(scene, m, n, iterations, airDamping, rings, seconds, k)
-                                       : run<double>(scene, m, n, iterations, airDamping, rings, seconds, k));
+            readings.push_back(isFloat ? run<float>(scene, m, n, iterations, airDamping, rings, weight, seconds, k)
+                                       : run<double>(scene, m, n, iterations, airDamping, rings, weight, seconds, k));
           std::printf("| %s | %d | %s | %s |", scenes::name(scene), n, toString(m), isFloat ? "float" : "double");
           if (placements > 1) {
             std::vector<double> all, near, strains, times;
