@@ -137,24 +137,20 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  if (iterations < 1 || iterations > 1000) {
-    std::fprintf(stderr, "rest_drift: --iterations must be in [1, 1000]\n");
-    return 2;
-  }
-  if (rings < 0 || rings > 8) {
-    std::fprintf(stderr, "rest_drift: --rings must be in [0, 8]\n");
-    return 2;
-  }
-  if (!(weight >= 0) || weight > 1) {
-    std::fprintf(stderr, "rest_drift: --weight must be in [0, 1]\n");
+  // The solver's settings check their own ranges (Settings::validate), before any run starts.
+  try {
+    Settings chosen;
+    chosen.iterationCount = iterations;
+    chosen.airDamping = airDamping;
+    chosen.propagationRings = rings;
+    chosen.propagationWeight = weight;
+    chosen.validate();
+  } catch (const Error& e) {
+    std::fprintf(stderr, "rest_drift: %s\n", e.what());
     return 2;
   }
   if (placements < 1 || placements > 1000) {
     std::fprintf(stderr, "rest_drift: --placements must be in [1, 1000]\n");
-    return 2;
-  }
-  if (!(airDamping >= 0) || airDamping > 1e4) {
-    std::fprintf(stderr, "rest_drift: --air-damping must be in [0, 1e4] 1/s\n");
     return 2;
   }
   const double seconds = argc > first ? std::atof(argv[first]) : 20.0;
