@@ -759,7 +759,7 @@ void main() {
   if (sweep.y > 0.0) {
     // Continuous contact: a face whose corners travelled further than the gate relative to the solid is searched
     // along its path first; from its first contact on, no corner goes further against the contact normal than it
-    // was then.
+    // was then, and a corner that already holds a contact of another direction goes back along its own path.
     vec3 from[3], to[3];
     for (int k = 0; k < 3; ++k) {
       const vec3 s0 = starts[t[k]].xyz;
@@ -782,9 +782,11 @@ void main() {
         precise const float dn = dot3(hn, then - to[k]);
         if (!(dn > 0.0)) continue;
         const uint vi = t[k];
-        precise const vec3 moved = to[k] + dn * hn;
-        x[vi] = vec4(moved, w[k]);
         Contact ct = contacts[vi];
+        bool other = false;
+        for (uint s = 0u; s < ct.slots.x; ++s) other = other || dot3(ct.normal[s].xyz, hn) < kMergeCos;
+        precise const vec3 moved = other ? then : to[k] + dn * hn;
+        x[vi] = vec4(moved, w[k]);
         const vec3 vc = solidContactVelocity(moved, hn, hp, centre, linearVelocity, angularVelocity);
 #if DRAPE_BODY
         lineRecord = lines[vi];

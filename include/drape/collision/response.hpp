@@ -87,6 +87,13 @@ template <Scalar S> struct ContactBuffer {
     if (!keep && !lines.empty()) std::vector<std::array<ContactLine<S>, kSlots>>().swap(lines);
   }
   bool live(Index i) const { return stamp[i] == current; }
+  /// Whether vertex i already holds, this substep, a contact whose normal is further than the merge angle from n.
+  bool holdsOtherDirection(Index i, const Vec3<S>& n) const {
+    if (!live(i)) return false;
+    for (int k = 0; k < slotCount[i]; ++k)
+      if (slots[i][k].normal.dot(n) < kMergeCos) return true;
+    return false;
+  }
   Index size() const { return Index(stamp.size()); }
   /// The vertices in contact this substep, in ascending order (allocates: for tests and tools).
   std::vector<Index> liveVertices() const {
@@ -634,14 +641,21 @@ S projectFaceContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, int p
           S when = 0;
           if (sweepFace(solid.sdf, from, to, thickness, pgdIterations, exactSearch, hit, evaluations, when)) {
             // From the first contact on, no corner goes further against the contact normal than it was then: the
-            // face keeps its travel along the surface and loses the rest of its approach.
+            // face keeps its travel along the surface and loses the rest of its approach. A corner that already
+            // holds a contact of another direction goes back along its own path instead: kept travel along two
+            // tangent planes of a thin solid leaves the path for where they meet, beyond both, and substep after
+            // substep that ratchets a corner away from the solid (docs/design.md §18, "The face's response").
             const Vec3<S>& n = hit.normal;
             bool any = false;
             for (int k = 0; k < 3; ++k) {
               if (invMass[t[k]] == S(0)) continue;
-              const S dn = n.dot(from[k] + when * (to[k] - from[k]) - x[t[k]]);
+              const Vec3<S> then = from[k] + when * (to[k] - from[k]);
+              const S dn = n.dot(then - x[t[k]]);
               if (!(dn > S(0))) continue;
-              x[t[k]] += dn * n;
+              if (contacts.holdsOtherDirection(t[k], n))
+                x[t[k]] = then;
+              else
+                x[t[k]] += dn * n;
               contacts.template record<kBody>(t[k], x[t[k]], n, dn, solid.motion, hit.point,
                                               solid.motion.contactVelocityAt(x[t[k]], n, hit.point));
               moved = std::max(moved, (x[t[k]] - binned[t[k]]).squaredNorm());
