@@ -1,6 +1,6 @@
 // Continuous contact (docs/design.md §18): a substep's travel must not carry the cloth through a solid thinner than
-// it. Each case runs with continuous contact (the default) and without, and asserts that the run without it does
-// tunnel: the scene is one the discrete passes alone get wrong.
+// it. The tunnelling cases run with continuous contact and without, and assert that the run without it does
+// tunnel: the scene is one the discrete passes alone get wrong. The others check what its answers do to the cloth.
 #include <drape/drape.hpp>
 
 #include <catch2/catch.hpp>
