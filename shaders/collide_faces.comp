@@ -808,7 +808,7 @@ void main() {
   vec3 qb, qn, qp;
   float qphi;
   if (!searchFace(x0, x1, x2, thickness, qb, qn, qp, qphi)) return;
-  if (qphi >= thickness) return;
+  if (qphi >= thickness * (1.0 - DRAPE_FACE_CONTACT_SLACK)) return;
 #if DRAPE_HOLDS_DEEPEST_POINTS
   // The face's held point, where it is as deep as the search's within the search's tolerance (HeldPoints in
   // include/drape/collision/response.hpp): a face parallel to a side or an edge of the solid is deepest along a

@@ -690,7 +690,7 @@ S projectFaceContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, int p
     }
     if constexpr (kSkip) skip.clear[ids[f]] = -std::numeric_limits<S>::infinity();
     counts.sdfEvaluations += q.evaluations;
-    if (q.phi >= thickness) continue;
+    if (q.phi >= thickness * S(1 - constants::kFaceContactSlack)) continue;
     if constexpr (kHold) {
       HeldPoint<S>& h = held.points[ids[f]];
       if (h.place == held.place) {

@@ -279,6 +279,7 @@ inline std::string preamble(const std::string& defines = {}) {
   s += define("DRAPE_MAX_CUTS", constants::kMaxCuts);
   s += define("DRAPE_FACE_SEARCH_GAP", constants::kFaceSearchGap);
   s += define("DRAPE_HELD_POINT_SLACK", constants::kHeldPointSlack);
+  s += define("DRAPE_FACE_CONTACT_SLACK", constants::kFaceContactSlack);
   s += define("DRAPE_CUT_SLACK", constants::kCutSlack);
   s += define("DRAPE_FLAT_SINE2", constants::kFlatSine2);
   s += define("DRAPE_CORNER_CULL_SLACK", constants::kCornerCullSlack);
