@@ -808,7 +808,11 @@ void main() {
   vec3 qb, qn, qp;
   float qphi;
   if (!searchFace(x0, x1, x2, thickness, qb, qn, qp, qphi)) return;
-  if (qphi >= thickness * (1.0 - DRAPE_FACE_CONTACT_SLACK)) return;
+  // faceContactSlack in include/drape/collision/response.hpp: a share of the thickness and a few roundings.
+  const vec3 qa = abs(qp);
+  if (qphi >= thickness - (thickness * DRAPE_FACE_CONTACT_SLACK +
+                           DRAPE_FACE_CONTACT_ROUNDING * max(max(qa.x, qa.y), qa.z)))
+    return;
 #if DRAPE_HOLDS_DEEPEST_POINTS
   // The face's held point, where it is as deep as the search's within the search's tolerance (HeldPoints in
   // include/drape/collision/response.hpp): a face parallel to a side or an edge of the solid is deepest along a

@@ -5,6 +5,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <cfloat>
 #include <cstdlib>
 #include <string>
 
@@ -43,6 +44,7 @@ TEST_CASE("every shared constant reaches the shaders as the float the CPU kernel
                {"DRAPE_FACE_SEARCH_GAP", c::kFaceSearchGap},
                {"DRAPE_HELD_POINT_SLACK", c::kHeldPointSlack},
                {"DRAPE_FACE_CONTACT_SLACK", c::kFaceContactSlack},
+               {"DRAPE_FACE_CONTACT_ROUNDING", c::kFaceContactRoundings * double(FLT_EPSILON)},
                {"DRAPE_CUT_SLACK", c::kCutSlack},
                {"DRAPE_FLAT_SINE2", c::kFlatSine2},
                {"DRAPE_CORNER_CULL_SLACK", c::kCornerCullSlack},

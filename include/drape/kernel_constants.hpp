@@ -33,11 +33,12 @@ inline constexpr int kMaxCuts = 16;
 inline constexpr double kFaceSearchGap = 3e-4;
 /// A cut is kept while it is within this share of the tolerance of the model's minimum.
 inline constexpr double kCutSlack = 0.01;
-/// A face whose deepest point is within this share of the thickness of the contact shell is left alone. A face
-/// lying on a flat side, its corners just placed at the thickness by their own contacts, reads a few roundings
-/// inside it (docs/design.md §3, "Faces at the thickness"). On a 5 mm thickness this is 0.1 micrometre, about
-/// float's rounding of a coordinate a metre from the origin.
+/// A face whose deepest point is within this share of the thickness of the contact shell, and this many roundings
+/// of its coordinates besides, is left alone. A face lying on a flat side, its corners just placed at the
+/// thickness by their own contacts, reads up to about one rounding of its point's largest coordinate inside it
+/// (docs/design.md §3, "Faces at the thickness"). On a 5 mm thickness the share is 0.1 micrometre.
 inline constexpr double kFaceContactSlack = 2e-5;
+inline constexpr double kFaceContactRoundings = 4;
 /// A face's held deepest point is kept while it is within this share of the search's tolerance of the search's
 /// answer (HeldPoints): wide enough for float's rounding of equally deep points, narrow enough to bias no push.
 inline constexpr double kHeldPointSlack = 0.01;

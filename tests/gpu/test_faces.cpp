@@ -239,6 +239,15 @@ TEST_CASE("collide_faces: the GPU face pass against projectFaceContacts, colour 
         },
         1e-6f, 1e-12f, true, 3 * 0.01 + 1e-6);
   }
+  SECTION("a cylinder tilted, its rim through the cloth") {
+    compareFacePass<drape::Cylinder>([](const Eigen::Vector3d& origin) {
+      drape::Solid<drape::Cylinder> cylinder{drape::Cylinder{0.06, 0.04}};
+      cylinder.pose.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 1, 0).normalized()));
+      cylinder.pose.position = origin + Eigen::Vector3d(0.004, -0.003, -0.055);
+      cylinder.staticFriction = 0.3;
+      return cylinder;
+    });
+  }
   SECTION("a convex hull (a rock of 40 points), an edge and a corner up") {
     compareFacePass<drape::ConvexHull>([](const Eigen::Vector3d& origin) {
       std::vector<Eigen::Vector3d> points;
@@ -936,13 +945,18 @@ TEST_CASE("a cloth dropped on a box, a capsule, a cylinder or a hull: GPU and CP
     hull.staticFriction = hull.dynamicFriction = 0.4;
     run(hull);
   }
-  SECTION("cylinder, tilted") {
+  SECTION("cylinder, lying") {
+    // Longer than the cloth is wide, so the cloth drapes over its side. Dropped over a tilted cylinder's rim (0.2 m
+    // by 0.4, tilted 0.4 rad, mu 0.3), the two solvers' folds part chaotically: the largest gap between their
+    // centres' heights was 0.71-1.18 cm over starts moved -3 to +3 mm, and 0.45-2.3 cm upright with mu 0.5, in
+    // a build as in one without faces at the thickness left alone (docs/design.md §3). The rim's face pass is
+    // compared directly, colour by colour, in "collide_faces: the GPU face pass against projectFaceContacts".
     drape::Solid<drape::Cylinder> cylinder;
-    cylinder.shape.radius = 0.2;
-    cylinder.shape.halfHeight = 0.2;
-    cylinder.pose.rotation = tilted;
-    cylinder.pose.position = {0, 0, 0.45};
-    cylinder.staticFriction = cylinder.dynamicFriction = 0.3;
+    cylinder.shape.radius = 0.15;
+    cylinder.shape.halfHeight = 0.6;
+    cylinder.pose.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(EIGEN_PI / 2, Eigen::Vector3d::UnitX()));
+    cylinder.pose.position = {0, 0, 0.5};
+    cylinder.staticFriction = cylinder.dynamicFriction = 0.5;
     run(cylinder);
   }
 }

@@ -592,6 +592,12 @@ VertexPassShare<S> projectVertexContacts(Index begin, Index end, const CompiledS
 ///
 /// With kHold, a face in contact is pushed from its held point (HeldPoints) where that is as deep as the search's
 /// answer (within kHeldPointSlack of its tolerance), and the point it is pushed from is held for the next substep.
+/// How far inside the thickness a face's deepest point may read and still be no contact: a share of the thickness
+/// and a few roundings of the point's largest coordinate (kFaceContactSlack, kFaceContactRoundings).
+template <Scalar S> S faceContactSlack(S thickness, const Vec3<S>& point) {
+  return thickness * S(constants::kFaceContactSlack) +
+         S(constants::kFaceContactRoundings) * std::numeric_limits<S>::epsilon() * point.cwiseAbs().maxCoeff();
+}
 template <bool kCull, bool kBody, bool kBoxed, bool kSweep, bool kOwnNormals = false, bool kSkip = false,
           bool kHold = false, class Shape, Scalar S, class Ids>
 S projectFaceContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, int pgdIterations,
@@ -690,7 +696,7 @@ S projectFaceContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, int p
     }
     if constexpr (kSkip) skip.clear[ids[f]] = -std::numeric_limits<S>::infinity();
     counts.sdfEvaluations += q.evaluations;
-    if (q.phi >= thickness * S(1 - constants::kFaceContactSlack)) continue;
+    if (q.phi >= thickness - faceContactSlack(thickness, q.point)) continue;
     if constexpr (kHold) {
       HeldPoint<S>& h = held.points[ids[f]];
       if (h.place == held.place) {

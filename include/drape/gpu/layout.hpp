@@ -10,6 +10,7 @@
 #include <cstddef>
 #include <cstdio>
 #include <cstdint>
+#include <limits>
 #include <string>
 
 namespace drape::gpu::layout {
@@ -280,6 +281,9 @@ inline std::string preamble(const std::string& defines = {}) {
   s += define("DRAPE_FACE_SEARCH_GAP", constants::kFaceSearchGap);
   s += define("DRAPE_HELD_POINT_SLACK", constants::kHeldPointSlack);
   s += define("DRAPE_FACE_CONTACT_SLACK", constants::kFaceContactSlack);
+  // The shaders work in float: the roundings' share of a coordinate, in float's epsilon.
+  s += define("DRAPE_FACE_CONTACT_ROUNDING",
+              constants::kFaceContactRoundings * double(std::numeric_limits<float>::epsilon()));
   s += define("DRAPE_CUT_SLACK", constants::kCutSlack);
   s += define("DRAPE_FLAT_SINE2", constants::kFlatSine2);
   s += define("DRAPE_CORNER_CULL_SLACK", constants::kCornerCullSlack);
