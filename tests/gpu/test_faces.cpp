@@ -948,8 +948,8 @@ TEST_CASE("a cloth dropped on a box, a capsule, a cylinder or a hull: GPU and CP
   SECTION("cylinder, lying") {
     // Longer than the cloth is wide, so the cloth drapes over its side. Dropped over a tilted cylinder's rim (0.2 m
     // by 0.4, tilted 0.4 rad, mu 0.3), the two solvers' folds part chaotically: the largest gap between their
-    // centres' heights was 0.71-1.18 cm over starts moved -3 to +3 mm, and 0.45-2.3 cm upright with mu 0.5, in
-    // a build as in one without faces at the thickness left alone (docs/design.md §3). The rim's face pass is
+    // centres' heights was 0.71-1.18 cm over starts moved -3 to +3 mm, and 0.45-2.3 cm upright with mu 0.5, both
+    // before and after faces at the thickness were left alone (docs/design.md §3, §9). The rim's face pass is
     // compared directly, colour by colour, in "collide_faces: the GPU face pass against projectFaceContacts".
     drape::Solid<drape::Cylinder> cylinder;
     cylinder.shape.radius = 0.15;

@@ -565,8 +565,14 @@ VertexPassShare<S> projectVertexContacts(Index begin, Index end, const CompiledS
   }, solid.motion.body >= 0);
 }
 
+/// How far inside the thickness a face's deepest point may read and still be no contact: a share of the thickness
+/// and a few roundings of the point's largest coordinate (kFaceContactSlack, kFaceContactRoundings).
+template <Scalar S> S faceContactSlack(S thickness, const Vec3<S>& point) {
+  return thickness * S(constants::kFaceContactSlack) +
+         S(constants::kFaceContactRoundings) * std::numeric_limits<S>::epsilon() * point.cwiseAbs().maxCoeff();
+}
 /// For every face: cull by bounding sphere (when kCull), find the deepest point by PGD, and if it is closer
-/// than `thickness`, move the face's vertices, weighted by barycentric weight and inverse mass
+/// than `thickness` by more than faceContactSlack, move the face's vertices, weighted by barycentric weight and inverse mass
 /// (dx_i = w_i b_i / sum_j w_j b_j^2 * depth * n), so that point reaches the thickness. Visits the faces `ids`
 /// (count of them) in order. Returns the largest distance of a moved vertex from `binned`. Serial: neighbouring
 /// faces share vertices.
@@ -592,12 +598,6 @@ VertexPassShare<S> projectVertexContacts(Index begin, Index end, const CompiledS
 ///
 /// With kHold, a face in contact is pushed from its held point (HeldPoints) where that is as deep as the search's
 /// answer (within kHeldPointSlack of its tolerance), and the point it is pushed from is held for the next substep.
-/// How far inside the thickness a face's deepest point may read and still be no contact: a share of the thickness
-/// and a few roundings of the point's largest coordinate (kFaceContactSlack, kFaceContactRoundings).
-template <Scalar S> S faceContactSlack(S thickness, const Vec3<S>& point) {
-  return thickness * S(constants::kFaceContactSlack) +
-         S(constants::kFaceContactRoundings) * std::numeric_limits<S>::epsilon() * point.cwiseAbs().maxCoeff();
-}
 template <bool kCull, bool kBody, bool kBoxed, bool kSweep, bool kOwnNormals = false, bool kSkip = false,
           bool kHold = false, class Shape, Scalar S, class Ids>
 S projectFaceContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, int pgdIterations,
