@@ -572,10 +572,10 @@ template <Scalar S> S faceContactSlack(S thickness, const Vec3<S>& point) {
          S(constants::kFaceContactRoundings) * std::numeric_limits<S>::epsilon() * point.cwiseAbs().maxCoeff();
 }
 /// For every face: cull by bounding sphere (when kCull), find the deepest point by PGD, and if it is closer
-/// than `thickness` by more than faceContactSlack, move the face's vertices, weighted by barycentric weight and inverse mass
-/// (dx_i = w_i b_i / sum_j w_j b_j^2 * depth * n), so that point reaches the thickness. Visits the faces `ids`
-/// (count of them) in order. Returns the largest distance of a moved vertex from `binned`. Serial: neighbouring
-/// faces share vertices.
+/// than `thickness` by more than faceContactSlack, move the face's vertices, weighted by barycentric weight and
+/// inverse mass (dx_i = w_i b_i / sum_j w_j b_j^2 * depth * n), so that point reaches the thickness. Visits the
+/// faces `ids` (count of them) in order. Returns the largest distance of a moved vertex from `binned`. Serial:
+/// neighbouring faces share vertices.
 ///
 /// With kBoxed and kCull (a bounded solid, given the faces the broad phase found near it), a face whose bounding
 /// box misses the solid's box grown by the thickness is passed over before any field evaluation: outside its box
