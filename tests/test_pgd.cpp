@@ -436,6 +436,60 @@ TEMPLATE_TEST_CASE("a face is culled from a ball by its corners only where no po
   CHECK(culled > kept / 2);
 }
 
+TEMPLATE_TEST_CASE("the vertex pass's cull of a ball or a capsule passes over no vertex within the thickness",
+                   "[pgd][culling]", float, double) {
+  // Points straight out from the centre or the core within a few hundred thousandths of the reach, where the
+  // roundings of the field's root and subtraction decide: a point the squared distance passes over (Sdf::beyond)
+  // must read at least the level, and one more than 1e-5 of the reach out is passed over. A cull a millionth of the
+  // reach squared too eager passes over some within the level.
+  using S = TestType;
+  const S level = S(drape::Settings{}.thickness) * S(1 - 1e-6);
+  std::mt19937 rng(735);
+  int passed = 0, tested = 0, wrongIfEager = 0;
+  // `squared`: the point's squared distance from the core, as the field takes its root
+  const auto check = [&](const auto& sdf, S squared, S radius, const Vec3<S>& x, bool far) {
+    Vec3<S> g;
+    const S phi = sdf(x, g);
+    const bool beyond = sdf.beyond(x, level);
+    INFO("point " << x.transpose() << ", phi " << phi << ", radius " << radius);
+    if (beyond) REQUIRE(phi >= level);
+    if (far) REQUIRE(beyond);
+    ++tested;
+    passed += beyond;
+    wrongIfEager += phi < level && squared > (radius + level) * (radius + level) * S(1 - 1e-6);
+  };
+  for (const double radius : {0.3, 0.05, 0.003}) {
+    const drape::Pose pose{randomRotation(rng), kWorld + randomInBall(rng, 0.5)};
+    const auto ball = drape::detail::compileSdf<S>(drape::Sphere{radius}, pose, kOrigin);
+    const auto cap = drape::detail::compileSdf<S>(drape::Capsule{radius, 0.2}, pose, kOrigin);
+    const double reach = radius + double(level);
+    for (int k = 0; k < 4000; ++k) {
+      // Half of them within a few float roundings of the reach.
+      const double spread = k % 2 == 0 ? 4e-5 : 4e-7;
+      const double out = reach * (1 + uniform(rng, -spread, spread));
+      const V3 u = randomUnit(rng);
+      const Vec3<S> onBall = (pose.position + out * u - kOrigin).cast<S>();
+      const bool far = out > reach * (1 + 1e-5);
+      check(ball, (onBall - ball.centre).squaredNorm(), ball.radius, onBall, far);
+      // Beside the capsule's side or over a cap.
+      const double along = uniform(rng, -0.3, 0.3);
+      const V3 axis = pose.rotation * V3::UnitZ();
+      const V3 side = u - u.dot(axis) * axis;
+      if (side.norm() < 1e-3) continue;
+      const V3 core = pose.position + std::clamp(along, -0.2, 0.2) * axis;
+      const V3 outward = std::abs(along) < 0.2 ? V3(side.normalized()) : u.dot(axis) * along >= 0 ? u : V3(-u);
+      const Vec3<S> onCapsule = (core + out * outward - kOrigin).cast<S>();
+      const Vec3<S> r = onCapsule - cap.centre;
+      const S t = std::clamp(r.dot(cap.axis), -cap.halfHeight, cap.halfHeight);
+      check(cap, Vec3<S>(r - t * cap.axis).squaredNorm(), cap.radius, onCapsule, far);
+    }
+  }
+  std::printf("[culling] %-6s ball and capsule, points within 4e-5 of the reach: %d of %d passed over; %d within "
+              "the level would be by a cull a millionth too eager\n",
+              sizeof(S) == 4 ? "float" : "double", passed, tested, wrongIfEager);
+  CHECK(wrongIfEager > 0);
+}
+
 // ============================================================================================================
 // 2c. The capsule's closed form
 

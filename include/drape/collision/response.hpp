@@ -535,6 +535,9 @@ VertexPassShare<S> projectVertexContactsAs(Index begin, Index end, const Compile
         }
       }
     }
+    // A ball's or capsule's vertex clear of the thickness is passed over on its squared distance (Sdf::beyond).
+    if constexpr (requires { solid.sdf.beyond(x[i], thickness); })
+      if (solid.sdf.beyond(x[i], thickness - slack)) continue;
     Vec3<S> n;
     const S phi = solid.sdf(x[i], n);
     if (phi >= thickness - slack) continue;

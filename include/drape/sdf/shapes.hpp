@@ -25,6 +25,14 @@ template <class Field>
 inline constexpr bool kHoldsDeepestPoints = !requires { Field::kPointCore; } && !requires { Field::kSegmentCore; };
 
 
+/// Whether a point at squared distance `squared` from a field's core (a ball's centre, a capsule's segment) lies
+/// beyond `reach` from it for certain, the root's and the subtraction's roundings included: `squared` must be the
+/// very value whose root the field takes. The margin, 1e-5 of reach squared, is about 80 float roundings; a point
+/// within it is left to the field. NaN passes over nothing. CPU only: it changes no result, only the work.
+template <Scalar S> DRAPE_ALWAYS_INLINE bool clearOfCore(S squared, S reach) {
+  return reach > S(0) && squared > reach * reach * S(1 + 1e-5);
+}
+
 template <Scalar S> struct Sdf<Plane, S> {
   static constexpr bool kLinear = true;  ///< phi is linear: its minimum over a face is at a vertex
   static constexpr bool kConvex = true;  ///< phi is convex: the face search may use its tangent planes as bounds
@@ -51,6 +59,12 @@ template <Scalar S> struct Sdf<Sphere, S> {
     const S len = d.norm();
     gradient = len > S(0) ? Vec3<S>(d / len) : Vec3<S>::UnitZ();
     return len - radius;
+  }
+  /// Whether phi(x) >= level for certain, read off the squared distance without the root and the division: the
+  /// vertex pass's cull (docs/design.md §3, "A vertex clear of a ball"). The squared distance is the one the
+  /// field's root is taken of, so a point it passes over reads at least `level` there.
+  DRAPE_ALWAYS_INLINE bool beyond(const Vec3<S>& x, S level) const {
+    return clearOfCore((x - centre).squaredNorm(), radius + level);
   }
   /// What the level surface through x curves about: a point, about which it curves along every tangent (axis
   /// set to zero), or a line through the point along a unit axis, about which it curves around the axis only.
@@ -110,6 +124,12 @@ template <Scalar S> struct Sdf<Capsule, S> {
       gradient = axis.unitOrthogonal();
     }
     return len - radius;
+  }
+  /// Whether phi(x) >= level for certain (Sdf<Sphere>::beyond), from the squared distance to the core segment.
+  DRAPE_ALWAYS_INLINE bool beyond(const Vec3<S>& x, S level) const {
+    const Vec3<S> r = x - centre;
+    const S t = std::clamp(r.dot(axis), -halfHeight, halfHeight);
+    return clearOfCore(Vec3<S>(r - t * axis).squaredNorm(), radius + level);
   }
   /// What the level surface through x curves about (Sdf<Sphere>::curvatureCentre): the axis along the side, a
   /// cap's centre beyond the ends.
