@@ -837,7 +837,12 @@ void main() {
   precise const vec3 wb = vec3(a.w * qb.x, b.w * qb.y, c.w * qb.z);
   precise const float denom = dot3(wb, qb);
   if (denom <= 0.0) return;
+#if DRAPE_SHAPE == DRAPE_SHAPE_SPHERE
+  // A ball's nearest point already has its gradient along the face's normal or across its edge.
+  precise float depth = thickness - qphi;
+#else
   precise float depth = featureAlignedPush(x0, x1, x2, thickness - qphi, qb, qp, qn);
+#endif
   // No corner moves more than kFaceMoveCap times the depth (projectFaceContactsAs).
   precise const float most = max(max(wb.x, wb.y), wb.z) / denom;
   if (most > DRAPE_FACE_MOVE_CAP) depth *= DRAPE_FACE_MOVE_CAP / most;

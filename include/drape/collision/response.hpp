@@ -719,9 +719,14 @@ S projectFaceContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, int p
     const S denom = wb.dot(q.barycentric);
     if (denom <= S(0)) continue;
     ++counts.faceContacts;
-    int extra = 0;
-    S depth = featureAlignedPush(solid.sdf, x[t[0]], x[t[1]], x[t[2]], thickness, thickness - q.phi, q, extra);
-    counts.sdfEvaluations += extra;
+    S depth = thickness - q.phi;
+    // A ball's nearest point (queryFace's closed form) already has its gradient along the face's normal inside the
+    // face and across the edge on one, which the feature push keeps (docs/design.md §3, "Feature normals").
+    if constexpr (!requires { Sdf<Shape, S>::kPointCore; }) {
+      int extra = 0;
+      depth = featureAlignedPush(solid.sdf, x[t[0]], x[t[1]], x[t[2]], thickness, depth, q, extra);
+      counts.sdfEvaluations += extra;
+    }
     // Corner k moves wb_k / denom times the depth: unbounded where the free corners carry little of the deepest
     // point (a body pressing a hammock beside its pinned border threw the next row 0.6 m in one substep). Capped
     // at kFaceMoveCap times the depth, the point is cleared over several substeps instead.
