@@ -1,6 +1,8 @@
 #pragma once
 // Eigen aliases, the library's error type, rigid poses and input checks.
 
+#include <drape/detail/attributes.hpp>
+
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
@@ -28,9 +30,20 @@ concept Scalar = std::is_same_v<S, float> || std::is_same_v<S, double>;
 
 /// a + s n, written out: on a hot path GCC compiled the Eigen expression into a call, whose three stores the
 /// caller then read back as one wide load, a store-forwarding stall each time.
-template <Scalar S> inline Vec3<S> movedAlong(const Vec3<S>& a, S s, const Vec3<S>& n) {
+template <Scalar S> DRAPE_ALWAYS_INLINE Vec3<S> movedAlong(const Vec3<S>& a, S s, const Vec3<S>& n) {
   return Vec3<S>(a.x() + s * n.x(), a.y() + s * n.y(), a.z() + s * n.z());
 }
+
+namespace detail {
+/// a . b in Eigen's order for three terms, a0 b0 + (a1 b1 + a2 b2), and a - b, written out: in the face pass,
+/// too large for GCC's inliner, Eigen's reductions became calls.
+template <Scalar S> DRAPE_ALWAYS_INLINE S dot3(const Vec3<S>& a, const Vec3<S>& b) {
+  return a.x() * b.x() + (a.y() * b.y() + a.z() * b.z());
+}
+template <Scalar S> DRAPE_ALWAYS_INLINE Vec3<S> minus3(const Vec3<S>& a, const Vec3<S>& b) {
+  return Vec3<S>(a.x() - b.x(), a.y() - b.y(), a.z() - b.z());
+}
+}  // namespace detail
 
 /// The square root through Eigen's scalar root, an SSE instruction on x86: for std::sqrt, which may set errno,
 /// GCC keeps a call to libm beside the instruction, and on the face pass's paths called it every time. The same

@@ -68,14 +68,6 @@ DRAPE_ALWAYS_INLINE bool nearestOnTriangle(const Vec3<S>& p, const Vec3<S>& x0, 
 
 namespace detail {
 
-/// a . b in Eigen's order for three terms, a0 b0 + (a1 b1 + a2 b2), and a - b, written out: in the face pass,
-/// too large for GCC's inliner, Eigen's reductions became calls.
-template <Scalar S> DRAPE_ALWAYS_INLINE S dot3(const Vec3<S>& a, const Vec3<S>& b) {
-  return a.x() * b.x() + (a.y() * b.y() + a.z() * b.z());
-}
-template <Scalar S> DRAPE_ALWAYS_INLINE Vec3<S> minus3(const Vec3<S>& a, const Vec3<S>& b) {
-  return Vec3<S>(a.x() - b.x(), a.y() - b.y(), a.z() - b.z());
-}
 /// x0 + b1 (x1 - x0) + b2 (x2 - x0), in Eigen's order, written out: in the face pass the Eigen expression became
 /// a call.
 template <Scalar S>
