@@ -35,8 +35,9 @@ template <Scalar S> DRAPE_ALWAYS_INLINE Vec3<S> movedAlong(const Vec3<S>& a, S s
 }
 
 namespace detail {
-/// a . b in Eigen's order for three terms, a0 b0 + (a1 b1 + a2 b2), and a - b, written out: in the face pass,
-/// too large for GCC's inliner, Eigen's reductions became calls.
+/// a . b as a0 b0 + (a1 b1 + a2 b2), and a - b, written out: in the face pass, too large for GCC's inliner,
+/// Eigen's reductions became calls. The order is Eigen's for float; for double, summed in SSE pairs, Eigen's is
+/// (a0 b0 + a1 b1) + a2 b2, so a field whose bits must not move keeps Eigen's sums (Sdf<Capsule>::fromCore).
 template <Scalar S> DRAPE_ALWAYS_INLINE S dot3(const Vec3<S>& a, const Vec3<S>& b) {
   return a.x() * b.x() + (a.y() * b.y() + a.z() * b.z());
 }
