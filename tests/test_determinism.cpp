@@ -5,6 +5,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <array>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -127,5 +128,152 @@ TEMPLATE_TEST_CASE("two threads give the bit-identical state of one thread", "[d
     two.threadCount = 2;
     INFO("method " << drape::toString(method));
     CHECK(runAndHash<TestType>(one) == runAndHash<TestType>(two));
+  }
+}
+
+namespace {
+
+/// Whether two faces share a corner.
+bool shareCorner(const std::array<drape::Index, 3>& a, const std::array<drape::Index, 3>& b) {
+  for (drape::Index u : a)
+    for (drape::Index v : b)
+      if (u == v) return true;
+  return false;
+}
+
+/// A sheet's faces renumbered: its rows in the order 0, 2, 4, ..., 1, 3, 5, ... and each row's faces backwards, so
+/// that rows sharing corners lie far apart in the numbering.
+std::vector<std::array<drape::Index, 3>> renumberedRows(const std::vector<std::array<drape::Index, 3>>& faces,
+                                                        drape::Index rowFaces) {
+  const drape::Index rows = drape::Index(faces.size()) / rowFaces;
+  std::vector<std::array<drape::Index, 3>> out;
+  for (int parity = 0; parity < 2; ++parity)
+    for (drape::Index r = parity; r < rows; r += 2)
+      for (drape::Index k = rowFaces - 1; k >= 0; --k) out.push_back(faces[std::size_t(r * rowFaces + k)]);
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("a wave's plan waits for exactly the faces before it in other threads' segments that share a corner",
+          "[determinism][threads]") {
+  drape::SheetDesc grid;
+  grid.nx = 40;
+  grid.ny = 30;
+  const auto sheet = drape::ClothAsset<float>::sheet(grid);
+  const drape::Index rowFaces = 2 * (grid.nx - 1);
+  const auto renumbered = renumberedRows(sheet.triangles, rowFaces);
+  for (const auto* faces : {&sheet.triangles, &renumbered})
+    for (int threads : {2, 3}) {
+      INFO((faces == &sheet.triangles ? "rows in order" : "rows renumbered") << ", " << threads << " threads");
+      drape::FaceWave wave;
+      REQUIRE(wave.ready(drape::Index(faces->size()), *faces, grid.nx * grid.ny, threads));
+      const std::vector<drape::Index>& bounds = wave.segments();
+      // Each row of faces (a run whose neighbours share corners) is cut into one segment per thread.
+      REQUIRE(bounds.size() == std::size_t(grid.ny - 1) * std::size_t(threads) + 1);
+      for (std::size_t k = 0; k + 1 < bounds.size(); ++k) {
+        CHECK(bounds[k + 1] - bounds[k] >= rowFaces / threads);
+        CHECK(bounds[k + 1] - bounds[k] <= rowFaces / threads + 1);
+      }
+      std::vector<int> owner(faces->size());
+      for (std::size_t k = 0; k + 1 < bounds.size(); ++k)
+        for (drape::Index f = bounds[k]; f < bounds[k + 1]; ++f) owner[std::size_t(f)] = int(k) % threads;
+      // Against a brute force over every pair of faces.
+      std::vector<drape::Index> need(faces->size());
+      int mismatches = 0, waiting = 0;
+      for (std::size_t f = 0; f < faces->size(); ++f) {
+        drape::Index last = -1;
+        for (std::size_t g = 0; g < f; ++g)
+          if (owner[g] != owner[f] && shareCorner((*faces)[g], (*faces)[f])) last = drape::Index(g);
+        need[f] = last;
+        waiting += last >= 0;
+      }
+      // Every thread visits its own segments of a list in order; together they visit the list once.
+      std::vector<drape::Index> list;
+      for (drape::Index f = 0; f < drape::Index(faces->size()); f += 1 + f % 3) list.push_back(f);
+      std::vector<int> visits(faces->size(), 0);
+      for (int t = 0; t < threads; ++t) {
+        drape::WaveGate gate = wave.gate(t, list.data());
+        const drape::Index count = drape::Index(list.size());
+        drape::Index before = -1, visited = 0;
+        for (drape::Index p = gate.first(count); p < count; p = gate.next(p, count)) {
+          const drape::Index f = list[std::size_t(p)];
+          CHECK(owner[std::size_t(f)] == t);
+          CHECK(f > before);
+          before = f;
+          ++visits[std::size_t(f)];
+          ++visited;
+        }
+        CHECK(gate.share(count) == visited);
+      }
+      for (drape::Index f : list) mismatches += visits[std::size_t(f)] != 1;
+      CHECK(mismatches == 0);
+      mismatches = 0;
+      for (std::size_t f = 0; f < faces->size(); ++f) mismatches += wave.need(drape::Index(f)) != need[f];
+      CHECK(mismatches == 0);
+      CHECK(waiting >= int(bounds.size()) - 2);  // at least the first face of every segment but the first
+    }
+  // Faces numbered in no order: no runs to cut, so the pass stays on one thread.
+  std::vector<std::array<drape::Index, 3>> shuffled = sheet.triangles;
+  for (std::size_t k = 0; k < shuffled.size(); ++k) std::swap(shuffled[k], shuffled[(k * 7919) % shuffled.size()]);
+  drape::FaceWave wave;
+  CHECK_FALSE(wave.ready(drape::Index(shuffled.size()), shuffled, grid.nx * grid.ny, 2));
+}
+
+TEMPLATE_TEST_CASE("a face pass shared by two or three threads gives one thread's contacts bit for bit",
+                   "[determinism][threads]", float, double) {
+  using S = TestType;
+  if (!drape::threadsAvailable()) WARN("drape was built without OpenMP: threadCount 2 runs on one thread here");
+  struct Case {
+    const char* name;
+    drape::Index side;
+    double spacing;
+    bool broadPhase, renumber;
+  };
+  // A cloth the ball's box holds (every face, with kept clearances), the same without the bins, one the ball's box
+  // holds a part of (the bins' list), and one whose rows are renumbered (rows sharing corners far apart).
+  for (const Case c : {Case{"every face", 50, 0.015, true, false}, Case{"no bins", 50, 0.015, false, false},
+                       Case{"the bins' list", 64, 0.02, true, false}, Case{"rows renumbered", 50, 0.015, true, true}}) {
+    INFO(c.name);
+    auto run = [&](int threads, std::int64_t& faceContacts, std::int64_t& keptClear) {
+      drape::SheetDesc grid;
+      grid.nx = grid.ny = c.side;
+      grid.spacing = c.spacing;
+      grid.placement.position = {0.01, -0.02, 0.65};
+      auto sheet = drape::ClothAsset<S>::sheet(grid);
+      if (c.renumber) {
+        const auto faces = renumberedRows(sheet.triangles, 2 * (c.side - 1));
+        std::vector<drape::Vec3<S>> points = sheet.restPositions;
+        for (auto& p : points) p += sheet.origin.template cast<S>();
+        sheet = drape::ClothAsset<S>::fromMesh(points, faces);
+      }
+      drape::Settings settings;
+      settings.threadCount = threads;
+      settings.broadPhase = c.broadPhase;
+      drape::Solver<S> solver(std::make_shared<const drape::ClothAsset<S>>(sheet), settings);
+      drape::Solid<drape::Sphere> ball;
+      ball.shape.radius = 0.3;
+      ball.pose.position = {0, 0, 0.3};
+      ball.staticFriction = ball.dynamicFriction = 0.4;
+      solver.addSolid(ball);
+      solver.addSolid(drape::Solid<drape::Plane>{});
+      faceContacts = keptClear = 0;
+      for (int f = 0; f < 30; ++f)
+        solver.step(1.0 / 60, [&](const drape::Solver<S>& s) noexcept {
+          faceContacts += s.stats().faceContacts;
+          keptClear += s.stats().facesKeptClear;
+        });
+      return hashState(solver.state());
+    };
+    std::int64_t contactsOne = 0, keptOne = 0;
+    const std::uint64_t one = run(1, contactsOne, keptOne);
+    CHECK(contactsOne > 100000);  // the cloth lies on the ball
+    for (int threads : {2, 3}) {
+      INFO(threads << " threads");
+      std::int64_t contacts = 0, kept = 0;
+      CHECK(run(threads, contacts, kept) == one);
+      CHECK(contacts == contactsOne);
+      CHECK(kept == keptOne);
+    }
   }
 }

@@ -3,11 +3,13 @@
 // (a curved solid's, with faces on), through the broad phase's bins for bounded solids; where surfaces meet,
 // the placement outside all of a vertex's contact planes and the settle passes. It owns the contact records,
 // the bins and the bookkeeping of how far the vertices have moved since they were binned. Called by every
-// thread of the solver's team: the vertex passes share their vertices (teamFor), the face passes and the bins
-// run on one thread.
+// thread of the solver's team: the vertex passes share their vertices (teamFor), a long face pass runs as a wave
+// (FaceWave: each thread follows the one before it, to the one thread's result), short ones and the bins run on
+// one thread.
 
 #include <drape/collision/broadphase.hpp>
 #include <drape/collision/response.hpp>
+#include <drape/collision/wave.hpp>
 #include <drape/detail/parallel.hpp>
 #include <drape/kernel_constants.hpp>
 
@@ -58,6 +60,18 @@ template <Scalar S> class ContactPasses {
     bins_.setTopology(triangles, vertexCount, cell);
     every_.resize(std::max(std::size_t(vertexCount), triangles.size()));
     for (std::size_t k = 0; k < every_.size(); ++k) every_[k] = Index(k);
+    // The faces around each vertex, ascending (KeptClearance::markAfter).
+    faceStart_.assign(std::size_t(vertexCount) + 1, 0);
+    for (const auto& t : triangles)
+      for (Index v : t) ++faceStart_[std::size_t(v) + 1];
+    for (std::size_t v = 0; v < std::size_t(vertexCount); ++v) faceStart_[v + 1] += faceStart_[v];
+    vertexFaces_.resize(std::size_t(faceStart_.back()));
+    movedMarks_.assign(triangles.size(), 0u);
+    wave_.forget();
+    facePass_ = 0;
+    std::vector<Index> fill(faceStart_.begin(), faceStart_.end() - 1);
+    for (std::size_t f = 0; f < triangles.size(); ++f)
+      for (Index v : triangles[f]) vertexFaces_[std::size_t(fill[std::size_t(v)]++)] = Index(f);
   }
 
   /// Before a substep: whether contacts with bounded solids go through the bins, and whether to keep the
@@ -199,7 +213,6 @@ template <Scalar S> class ContactPasses {
   template <bool kFaces, bool kCull, bool kSweep, class Solid>
   void projectSolid(const Solid& solid, const PassInputs<S>& in, S slack, Index n, S reach, Index place) {
     Vec3<S>* x = in.x;
-    const S* w = in.invMass;
     const S thickness = in.thickness;
     constexpr bool kFacePass = kFaces && !std::decay_t<decltype(solid.sdf)>::kLinear;
     if (useBins_ && solid.bounded) {
@@ -221,14 +234,23 @@ template <Scalar S> class ContactPasses {
         moveBound_ = 0;
         if constexpr (kFacePass) {
           if (!whole_) bins_.faces(x, solid.boxLow, solid.boxHigh, thickness + reach, nearFaces_);
-          KeptClearance<S> skip;
-          if (kept_ != nullptr) skip = {kept_->faces.data(), bins_.drift()};
-          bins_.noteDrift(projectFaceContacts<kCull, true, kSweep>(
-              solid, thickness, in.pgdIterations, in.triangles, ItemList{whole_ ? every_.data() : nearFaces_.data()},
-              whole_ ? Index(in.triangles.size()) : Index(nearFaces_.size()), x, w, contacts_, stats_,
-              bins_.binned(), in.exactGridSearch, in.sweep, in.ownNormals, in.keepTurn, skip,
-              HeldPoints<S>{held_.data(), std::int32_t(place)}));
+          skip_ = {};
+          if (kept_ != nullptr) {
+            if (++facePass_ == 0) {  // wrapped: no mark may look like this pass's
+              facePass_ = 1;
+              std::fill(movedMarks_.begin(), movedMarks_.end(), 0u);
+            }
+            skip_ = {kept_->faces.data(), bins_.drift(), movedMarks_.data(), facePass_, faceStart_.data(),
+                     vertexFaces_.data()};
+          }
         }
+      }
+      if constexpr (kFacePass) {
+        const ItemList faces{whole_ ? every_.data() : nearFaces_.data()};
+        const Index count = whole_ ? Index(in.triangles.size()) : Index(nearFaces_.size());
+        const S moved = projectFaces<kCull, true, kSweep>(solid, in, faces, count, n, bins_.binned(), place);
+        DRAPE_OMP(single)
+        bins_.noteDrift(moved);
       }
     } else {
       // Without the bins, the binned positions are the positions: nothing drifts.
@@ -236,12 +258,12 @@ template <Scalar S> class ContactPasses {
       projectVertices<kSweep>(solid, in, AllItems{}, n, binned, slack);
       if constexpr (kFacePass) {
         DRAPE_OMP(single)
-        {
-          const S moved = projectFaceContacts<kCull, false, kSweep>(
-              solid, thickness, in.pgdIterations, in.triangles, AllItems{}, Index(in.triangles.size()), x, w,
-              contacts_, stats_, binned, in.exactGridSearch, in.sweep, in.ownNormals, in.keepTurn, {},
-              HeldPoints<S>{held_.data(), std::int32_t(place)});
-          if (useBins_) bins_.noteDrift(moved);
+        skip_ = {};
+        const S moved = projectFaces<kCull, false, kSweep>(solid, in, AllItems{}, Index(in.triangles.size()), n,
+                                                           binned, place);
+        if (useBins_) {
+          DRAPE_OMP(single)
+          bins_.noteDrift(moved);
         }
       }
       if (useBins_) {
@@ -252,6 +274,38 @@ template <Scalar S> class ContactPasses {
         }
       }
     }
+  }
+
+  static const Index* items(ItemList ids) { return ids.items; }
+  static const Index* items(AllItems) { return nullptr; }
+
+  /// One solid's face pass over ids[0, count), called by every thread of the team: shared as a wave (FaceWave)
+  /// where the list is long enough, else on one thread. The result is the one thread's, bit for bit, on any
+  /// number of threads. Returns the largest distance of a moved vertex from `binned`, to every thread.
+  template <bool kCull, bool kBoxed, bool kSweep, class Solid, class Ids>
+  S projectFaces(const Solid& solid, const PassInputs<S>& in, Ids ids, Index count, Index n, const Vec3<S>* binned,
+                 Index place) {
+    const HeldPoints<S> held{held_.data(), std::int32_t(place)};
+    DRAPE_OMP(single)
+    {
+      waved_ = wave_.ready(count, in.triangles, n, teamThreads());
+      faceMoved_ = 0;
+      if (!waved_)
+        faceMoved_ = projectFaceContacts<kCull, kBoxed, kSweep>(
+            solid, in.thickness, in.pgdIterations, in.triangles, ids, count, in.x, in.invMass, contacts_, stats_,
+            binned, in.exactGridSearch, in.sweep, in.ownNormals, in.keepTurn, skip_, held);
+    }
+    if (waved_) {
+      CollisionStats mine;
+      const S moved = projectFaceContacts<kCull, kBoxed, kSweep>(
+          solid, in.thickness, in.pgdIterations, in.triangles, ids, count, in.x, in.invMass, contacts_, mine, binned,
+          in.exactGridSearch, in.sweep, in.ownNormals, in.keepTurn, skip_, held, wave_.gate(teamThread(), items(ids)));
+      DRAPE_OMP(critical(drape_face_stats))
+      stats_ += mine;
+      teamMax(faceMoved_, moved);
+      DRAPE_OMP(barrier)
+    }
+    return faceMoved_;
   }
 
   /// One solid's vertex pass over ids[0, count), shared by the team. The counts and the move bound are added
@@ -305,6 +359,13 @@ template <Scalar S> class ContactPasses {
   VertexBins<S> bins_;
   std::vector<Index> nearVertices_, nearFaces_;  ///< what the bins found near the current solid
   std::vector<Index> every_;  ///< 0, 1, 2, ...: every vertex and face, for a solid that holds most of the cloth
+  std::vector<Index> faceStart_, vertexFaces_;  ///< the faces around each vertex (KeptClearance)
+  std::vector<std::uint32_t> movedMarks_;        ///< by face (KeptClearance::moved)
+  std::uint32_t facePass_ = 0;                   ///< face passes with kept clearances so far
+  KeptClearance<S> skip_;                        ///< the current face pass's (shared by the team)
+  FaceWave wave_;                                ///< the face passes' plan for a team
+  bool waved_ = false;                           ///< the current face pass is shared (shared by the team)
+  S faceMoved_ = 0;                              ///< its largest move (shared by the team)
   bool whole_ = false;        ///< the current solid visits every vertex and face (shared by the team)
   S moveBound_ = 0;         ///< the passes' largest distance from the binned positions (shared by the team)
   bool useBins_ = false;    ///< contacts with bounded solids go through the bins this substep

@@ -265,10 +265,30 @@ template <Scalar S> struct SweepInputs {
 /// (ContactPasses, docs/design.md §13 "Clearances kept between substeps"): for each face, how far its vertices may
 /// move from where the bins took them before the face can come within the thickness, as its last test showed.
 /// Every vertex lies within `drift` of its binned position when the pass starts (the bins' drift), so a face
-/// whose clearance exceeds that is still culled, and the pass passes over it without a test.
+/// whose clearance exceeds that is still culled, and the pass passes over it without a test. A face in contact
+/// marks the faces after it in the pass that share a corner it moved: their corners may now be further than the
+/// drift from their binned positions, so they are tested and keep no clearance this time. What a face reads thus
+/// depends only on the faces that share its corners, not on the order of the others.
 template <Scalar S> struct KeptClearance {
   S* clear = nullptr;  ///< by face index; -infinity where the face was not culled or not yet tested
   S drift = 0;
+  /// By face index: `pass` where a face before it in this pass moved one of its corners. Integers, so that the
+  /// marks' stores cannot alias the positions the pass reads.
+  std::uint32_t* moved = nullptr;
+  std::uint32_t pass = 0;
+  /// The faces around each vertex, ascending: those of vertex v are faces[faceStart[v] .. faceStart[v + 1]).
+  const Index* faceStart = nullptr;
+  const Index* faces = nullptr;
+  /// Whether face f may be passed over: its clearance exceeds the drift and no corner of it has moved.
+  DRAPE_ALWAYS_INLINE bool clearOf(Index f) const { return clear[f] > drift && moved[f] != pass; }
+  /// After face `g` moved vertex v: the faces after g around v are marked.
+  DRAPE_ALWAYS_INLINE void markAfter(Index g, Index v) const {
+    for (Index k = faceStart[v + 1] - 1; k >= faceStart[v] && faces[k] > g; --k) moved[faces[k]] = pass;
+  }
+  /// The clearance face f keeps: what its test found beyond the drift, or none where a corner has moved.
+  DRAPE_ALWAYS_INLINE void keep(Index f, S found) const {
+    clear[f] = moved[f] == pass ? -std::numeric_limits<S>::infinity() : found - drift;
+  }
 };
 
 /// Where each face was deepest in a solid the last time it touched one (ContactPasses; docs/design.md §3, "Ties
@@ -392,6 +412,15 @@ struct AllItems {
 struct ItemList {
   const Index* items;
   Index operator[](Index k) const { return items[k]; }
+};
+/// The order of a face pass on one thread: every position of the list, in turn. (A team shares a pass through
+/// WaveGate, collision/wave.hpp, which visits this thread's segments and waits where a face shares a corner with a
+/// face of another thread's segment before it.)
+struct SerialGate {
+  static Index first(Index) { return 0; }
+  static Index next(Index f, Index) { return f + 1; }
+  static void wait(Index) {}
+  static Index share(Index count) { return count; }
 };
 
 /// What one share of a vertex pass did: how many vertices it moved and how many it looked at, and the largest
@@ -595,33 +624,36 @@ template <Scalar S> S faceContactSlack(S thickness, const Vec3<S>& point) {
 /// where `keepTurn` is given (the velocities, after the update), a moved corner's velocity keeps its moment about
 /// the centre of curvature (keepTurnAbout).
 ///
-/// With kSkip (a solid that does not move, with the bins on), a face whose kept clearance exceeds how far any
-/// vertex may be from its binned position is passed over, and every culled face's clearance is kept (KeptClearance).
-/// The bound grows with the pass's own moves, so the contacts are bit for bit those of the pass without it.
+/// With kSkip (a solid that does not move, with the bins on, visiting every face in index order), a face whose
+/// kept clearance exceeds how far any vertex may be from its binned position is passed over, and every culled
+/// face's clearance is kept (KeptClearance). A face whose corners this pass has moved is tested and keeps none, so
+/// the contacts are bit for bit those of the pass without it.
 ///
 /// With kHold, a face in contact is pushed from its held point (HeldPoints) where that is as deep as the search's
 /// answer (within kHeldPointSlack of its tolerance), and the point it is pushed from is held for the next substep.
+///
+/// `gate` says which positions of the list this thread visits and when (SerialGate: all, in turn).
 template <bool kCull, bool kBody, bool kBoxed, bool kSweep, bool kOwnNormals = false, bool kSkip = false,
-          bool kHold = false, class Shape, Scalar S, class Ids>
+          bool kHold = false, class Shape, Scalar S, class Ids, class Gate = SerialGate>
 S projectFaceContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, int pgdIterations,
                         const std::vector<std::array<Index, 3>>& triangles, Ids ids, Index count, Vec3<S>* x,
                         const S* invMass, ContactBuffer<S>& contacts, CollisionStats& stats, const Vec3<S>* binned,
                         bool exactSearch, const SweepInputs<S>& sweep, [[maybe_unused]] Vec3<S>* keepTurn = nullptr,
-                        [[maybe_unused]] KeptClearance<S> skip = {}, [[maybe_unused]] HeldPoints<S> held = {}) {
+                        [[maybe_unused]] KeptClearance<S> skip = {}, [[maybe_unused]] HeldPoints<S> held = {},
+                        Gate gate = {}) {
   static_assert(!kSkip || (kCull && kBoxed && !kSweep && !kBody), "a kept clearance is a cull's, on a still solid");
   S moved = 0;
   CollisionStats counts;  // kept apart from `stats`, which the moves below may alias
   [[maybe_unused]] const Vec3<S> boxLow = solid.boxLow.array() - thickness;
   [[maybe_unused]] const Vec3<S> boxHigh = solid.boxHigh.array() + thickness;
-  // kSkip: how far any vertex may now be from its binned position (the drift, grown by this pass's moves), and
-  // the rounding slack of a clearance read off the box check.
-  [[maybe_unused]] S reached = skip.drift;
+  // kSkip: the rounding slack of a clearance read off the box check.
   [[maybe_unused]] const S boxSlack =
       S(kClearanceSlack) * std::max(boxLow.cwiseAbs().maxCoeff(), boxHigh.cwiseAbs().maxCoeff());
-  for (Index f = 0; f < count; ++f) {
+  for (Index f = gate.first(count); f < count; f = gate.next(f, count)) {
+    gate.wait(f);
     const auto& t = triangles[std::size_t(ids[f])];
     if constexpr (kSkip) {
-      if (skip.clear[ids[f]] > reached) {
+      if (skip.clearOf(ids[f])) {
         ++counts.facesCulled;
         ++counts.facesKeptClear;
         continue;
@@ -682,8 +714,7 @@ S projectFaceContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, int p
       if (!((faceHigh.array() >= boxLow.array()).all() && (faceLow.array() <= boxHigh.array()).all())) {
         // Moved by less than the widest gap along an axis, the face's box still misses the grown one.
         if constexpr (kSkip)
-          skip.clear[ids[f]] = std::max((boxLow - faceHigh).maxCoeff(), (faceLow - boxHigh).maxCoeff()) -
-                               boxSlack - reached;
+          skip.keep(ids[f], std::max((boxLow - faceHigh).maxCoeff(), (faceLow - boxHigh).maxCoeff()) - boxSlack);
         ++counts.facesCulled;
         continue;
       }
@@ -692,7 +723,7 @@ S projectFaceContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, int p
     [[maybe_unused]] S clearance = 0;
     if (!queryFace<kCull, kSkip>(solid.sdf, x[t[0]], x[t[1]], x[t[2]], thickness, pgdIterations, q, exactSearch,
                                  &clearance)) {
-      if constexpr (kSkip) skip.clear[ids[f]] = clearance - reached;
+      if constexpr (kSkip) skip.keep(ids[f], clearance);
       ++counts.facesCulled;
       ++counts.sdfEvaluations;
       continue;
@@ -754,19 +785,21 @@ S projectFaceContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, int p
       contacts.template record<kBody>(t[k], p, n, dn, solid.motion, anchor,
                                       solid.motion.contactVelocityAt(p, n, anchor));
       moved = std::max(moved, (p - binned[t[k]]).squaredNorm());
+      if constexpr (kSkip) skip.markAfter(ids[f], t[k]);
     }
-    if constexpr (kSkip) reached = std::max(skip.drift, rootOf(moved));
   }
-  counts.facesTested += count;
+  counts.facesTested += gate.share(count);
   stats += counts;
   return std::sqrt(moved);
 }
-template <bool kCull, bool kBoxed = false, bool kSweep = false, class Shape, Scalar S, class Ids>
+template <bool kCull, bool kBoxed = false, bool kSweep = false, class Shape, Scalar S, class Ids,
+          class Gate = SerialGate>
 S projectFaceContacts(const CompiledSolid<Shape, S>& solid, S thickness, int pgdIterations,
                       const std::vector<std::array<Index, 3>>& triangles, Ids ids, Index count, Vec3<S>* x,
                       const S* invMass, ContactBuffer<S>& contacts, CollisionStats& stats, const Vec3<S>* binned,
                       bool exactSearch = true, const SweepInputs<S>& sweep = {}, bool ownNormals = false,
-                      Vec3<S>* keepTurn = nullptr, KeptClearance<S> skip = {}, HeldPoints<S> held = {}) {
+                      Vec3<S>* keepTurn = nullptr, KeptClearance<S> skip = {}, HeldPoints<S> held = {},
+                      Gate gate = {}) {
   const bool body = solid.motion.body >= 0;
   constexpr bool kMayHold = kHoldsDeepestPoints<Sdf<Shape, S>>;
   return withFlags([&](auto holdFlag) {
@@ -775,25 +808,25 @@ S projectFaceContacts(const CompiledSolid<Shape, S>& solid, S thickness, int pgd
       if (skip.clear != nullptr && !body) {
         if constexpr (kSmoothField<Shape, S>) {
           if (ownNormals)  // the corners' own normals change the records, not which faces are culled
-            return projectFaceContactsAs<kCull, false, kBoxed, kSweep, true, true, kHold>(
+            return projectFaceContactsAs<kCull, false, kBoxed, kSweep, true, true, kHold, Shape, S, Ids, Gate>(
                 solid, thickness, pgdIterations, triangles, ids, count, x, invMass, contacts, stats, binned,
-                exactSearch, sweep, keepTurn, skip, held);
+                exactSearch, sweep, keepTurn, skip, held, gate);
         }
-        return projectFaceContactsAs<kCull, false, kBoxed, kSweep, false, true, kHold>(
+        return projectFaceContactsAs<kCull, false, kBoxed, kSweep, false, true, kHold, Shape, S, Ids, Gate>(
             solid, thickness, pgdIterations, triangles, ids, count, x, invMass, contacts, stats, binned,
-            exactSearch, sweep, keepTurn, skip, held);
+            exactSearch, sweep, keepTurn, skip, held, gate);
       }
     }
     if constexpr (kSmoothField<Shape, S>) {
       if (ownNormals && !body)
-        return projectFaceContactsAs<kCull, false, kBoxed, kSweep, true, false, kHold>(
+        return projectFaceContactsAs<kCull, false, kBoxed, kSweep, true, false, kHold, Shape, S, Ids, Gate>(
             solid, thickness, pgdIterations, triangles, ids, count, x, invMass, contacts, stats, binned,
-            exactSearch, sweep, keepTurn, KeptClearance<S>{}, held);
+            exactSearch, sweep, keepTurn, KeptClearance<S>{}, held, gate);
     }
     return withFlags([&](auto isBody) {
-      return projectFaceContactsAs<kCull, isBody(), kBoxed, kSweep, false, false, kHold>(
+      return projectFaceContactsAs<kCull, isBody(), kBoxed, kSweep, false, false, kHold, Shape, S, Ids, Gate>(
           solid, thickness, pgdIterations, triangles, ids, count, x, invMass, contacts, stats, binned, exactSearch,
-          sweep, static_cast<Vec3<S>*>(nullptr), KeptClearance<S>{}, held);
+          sweep, static_cast<Vec3<S>*>(nullptr), KeptClearance<S>{}, held, gate);
     }, body);
   }, kMayHold && held.points != nullptr);
 }

@@ -29,6 +29,22 @@ inline int hardwareThreads() {
 #endif
 }
 
+/// How many threads the calling thread's team has (1 outside a team), and the calling thread's number in it.
+inline int teamThreads() {
+#ifdef _OPENMP
+  return omp_get_num_threads();
+#else
+  return 1;
+#endif
+}
+inline int teamThread() {
+#ifdef _OPENMP
+  return omp_get_thread_num();
+#else
+  return 0;
+#endif
+}
+
 /// The calling thread's share [begin, end) of n items: inside a team, contiguous shares in thread order, the
 /// first n % T threads one item more (the split of OpenMP's static schedule); outside a team, all n.
 template <class I> std::pair<I, I> teamShare(I n) {
