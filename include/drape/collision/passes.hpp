@@ -248,7 +248,7 @@ template <Scalar S> class ContactPasses {
       if constexpr (kFacePass) {
         const ItemList faces{whole_ ? every_.data() : nearFaces_.data()};
         const Index count = whole_ ? Index(in.triangles.size()) : Index(nearFaces_.size());
-        const S moved = projectFaces<kCull, true, kSweep>(solid, in, faces, count, n, bins_.binned(), place);
+        const S moved = projectFaces<kCull, true, kSweep>(solid, in, faces, count, n, bins_.binned(), place, skip_);
         DRAPE_OMP(single)
         bins_.noteDrift(moved);
       }
@@ -257,10 +257,8 @@ template <Scalar S> class ContactPasses {
       const Vec3<S>* binned = useBins_ ? bins_.binned() : x;
       projectVertices<kSweep>(solid, in, AllItems{}, n, binned, slack);
       if constexpr (kFacePass) {
-        DRAPE_OMP(single)
-        skip_ = {};
         const S moved = projectFaces<kCull, false, kSweep>(solid, in, AllItems{}, Index(in.triangles.size()), n,
-                                                           binned, place);
+                                                           binned, place, KeptClearance<S>{});
         if (useBins_) {
           DRAPE_OMP(single)
           bins_.noteDrift(moved);
@@ -284,7 +282,7 @@ template <Scalar S> class ContactPasses {
   /// number of threads. Returns the largest distance of a moved vertex from `binned`, to every thread.
   template <bool kCull, bool kBoxed, bool kSweep, class Solid, class Ids>
   S projectFaces(const Solid& solid, const PassInputs<S>& in, Ids ids, Index count, Index n, const Vec3<S>* binned,
-                 Index place) {
+                 Index place, KeptClearance<S> skip) {
     const HeldPoints<S> held{held_.data(), std::int32_t(place)};
     DRAPE_OMP(single)
     {
@@ -293,13 +291,13 @@ template <Scalar S> class ContactPasses {
       if (!waved_)
         faceMoved_ = projectFaceContacts<kCull, kBoxed, kSweep>(
             solid, in.thickness, in.pgdIterations, in.triangles, ids, count, in.x, in.invMass, contacts_, stats_,
-            binned, in.exactGridSearch, in.sweep, in.ownNormals, in.keepTurn, skip_, held);
+            binned, in.exactGridSearch, in.sweep, in.ownNormals, in.keepTurn, skip, held);
     }
     if (waved_) {
       CollisionStats mine;
       const S moved = projectFaceContacts<kCull, kBoxed, kSweep>(
           solid, in.thickness, in.pgdIterations, in.triangles, ids, count, in.x, in.invMass, contacts_, mine, binned,
-          in.exactGridSearch, in.sweep, in.ownNormals, in.keepTurn, skip_, held, wave_.gate(teamThread(), items(ids)));
+          in.exactGridSearch, in.sweep, in.ownNormals, in.keepTurn, skip, held, wave_.gate(teamThread(), items(ids)));
       DRAPE_OMP(critical(drape_face_stats))
       stats_ += mine;
       teamMax(faceMoved_, moved);

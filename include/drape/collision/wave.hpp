@@ -11,6 +11,7 @@
 // ascending order.
 
 #include <drape/collision/response.hpp>
+#include <drape/detail/simd.hpp>
 
 #include <algorithm>
 #include <array>
@@ -20,10 +21,6 @@
 #include <memory>
 #include <thread>
 #include <vector>
-
-#if defined(__SSE2__)
-#include <immintrin.h>
-#endif
 
 namespace drape {
 
@@ -39,7 +36,7 @@ struct alignas(64) WavePlace {
 inline void spinPause(int& turns) {
   if (turns < kSpinTurns) {
     ++turns;
-#if defined(__SSE2__)
+#if DRAPE_SSE2
     _mm_pause();
 #endif
   } else {
