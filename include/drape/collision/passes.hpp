@@ -60,18 +60,9 @@ template <Scalar S> class ContactPasses {
     bins_.setTopology(triangles, vertexCount, cell);
     every_.resize(std::max(std::size_t(vertexCount), triangles.size()));
     for (std::size_t k = 0; k < every_.size(); ++k) every_[k] = Index(k);
-    // The faces around each vertex, ascending (KeptClearance::markAfter).
-    faceStart_.assign(std::size_t(vertexCount) + 1, 0);
-    for (const auto& t : triangles)
-      for (Index v : t) ++faceStart_[std::size_t(v) + 1];
-    for (std::size_t v = 0; v < std::size_t(vertexCount); ++v) faceStart_[v + 1] += faceStart_[v];
-    vertexFaces_.resize(std::size_t(faceStart_.back()));
-    movedMarks_.assign(triangles.size(), 0u);
+    movedMarks_.assign(std::size_t(vertexCount), 0u);
     wave_.forget();
     facePass_ = 0;
-    std::vector<Index> fill(faceStart_.begin(), faceStart_.end() - 1);
-    for (std::size_t f = 0; f < triangles.size(); ++f)
-      for (Index v : triangles[f]) vertexFaces_[std::size_t(fill[std::size_t(v)]++)] = Index(f);
   }
 
   /// Before a substep: whether contacts with bounded solids go through the bins, and whether to keep the
@@ -240,8 +231,7 @@ template <Scalar S> class ContactPasses {
               facePass_ = 1;
               std::fill(movedMarks_.begin(), movedMarks_.end(), 0u);
             }
-            skip_ = {kept_->faces.data(), bins_.drift(), movedMarks_.data(), facePass_, faceStart_.data(),
-                     vertexFaces_.data()};
+            skip_ = {kept_->faces.data(), bins_.drift(), movedMarks_.data(), facePass_};
           }
         }
       }
@@ -357,8 +347,7 @@ template <Scalar S> class ContactPasses {
   VertexBins<S> bins_;
   std::vector<Index> nearVertices_, nearFaces_;  ///< what the bins found near the current solid
   std::vector<Index> every_;  ///< 0, 1, 2, ...: every vertex and face, for a solid that holds most of the cloth
-  std::vector<Index> faceStart_, vertexFaces_;  ///< the faces around each vertex (KeptClearance)
-  std::vector<std::uint32_t> movedMarks_;        ///< by face (KeptClearance::moved)
+  std::vector<std::uint32_t> movedMarks_;        ///< by vertex (KeptClearance::moved)
   std::uint32_t facePass_ = 0;                   ///< face passes with kept clearances so far
   KeptClearance<S> skip_;                        ///< the current face pass's (shared by the team)
   FaceWave wave_;                                ///< the face passes' plan for a team

@@ -266,28 +266,32 @@ template <Scalar S> struct SweepInputs {
 /// move from where the bins took them before the face can come within the thickness, as its last test showed.
 /// Every vertex lies within `drift` of its binned position when the pass starts (the bins' drift), so a face
 /// whose clearance exceeds that is still culled, and the pass passes over it without a test. A face in contact
-/// marks the faces after it in the pass that share a corner it moved: their corners may now be further than the
-/// drift from their binned positions, so they are tested and keep no clearance this time. What a face reads thus
-/// depends only on the faces that share its corners, not on the order of the others.
+/// stamps the corners it moved: the faces visited after it that share such a corner may now be further than the
+/// drift from their binned positions, so they are tested and keep no clearance this time. Faces that share a corner
+/// are visited in index order (on any number of threads, FaceWave), so a stamp a face reads was left by a face
+/// before it. What a face reads thus depends only on the faces that share its corners, not on the order of the
+/// others.
 template <Scalar S> struct KeptClearance {
   S* clear = nullptr;  ///< by face index; -infinity where the face was not culled or not yet tested
   S drift = 0;
-  /// By face index: `pass` where a face before it in this pass moved one of its corners. Integers, so that the
-  /// marks' stores cannot alias the positions the pass reads.
+  /// By vertex index: `pass` where a face of this pass moved the vertex. Integers, so that the stamps' stores
+  /// cannot alias the positions the pass reads. One store per moved corner, where marking the faces after it
+  /// around the corner cost a loop over them (a tenth of a contact face's time on a ball).
   std::uint32_t* moved = nullptr;
   std::uint32_t pass = 0;
-  /// The faces around each vertex, ascending: those of vertex v are faces[faceStart[v] .. faceStart[v + 1]).
-  const Index* faceStart = nullptr;
-  const Index* faces = nullptr;
-  /// Whether face f may be passed over: its clearance exceeds the drift and no corner of it has moved.
-  DRAPE_ALWAYS_INLINE bool clearOf(Index f) const { return clear[f] > drift && moved[f] != pass; }
-  /// After face `g` moved vertex v: the faces after g around v are marked.
-  DRAPE_ALWAYS_INLINE void markAfter(Index g, Index v) const {
-    for (Index k = faceStart[v + 1] - 1; k >= faceStart[v] && faces[k] > g; --k) moved[faces[k]] = pass;
+  /// Whether a corner of face t has moved in this pass.
+  DRAPE_ALWAYS_INLINE bool cornerMoved(const std::array<Index, 3>& t) const {
+    return (moved[t[0]] == pass) | (moved[t[1]] == pass) | (moved[t[2]] == pass);
   }
+  /// Whether face f (corners t) may be passed over: its clearance exceeds the drift and no corner of it has moved.
+  DRAPE_ALWAYS_INLINE bool clearOf(Index f, const std::array<Index, 3>& t) const {
+    return clear[f] > drift && !cornerMoved(t);
+  }
+  /// After a face moved vertex v.
+  DRAPE_ALWAYS_INLINE void stamp(Index v) const { moved[v] = pass; }
   /// The clearance face f keeps: what its test found beyond the drift, or none where a corner has moved.
-  DRAPE_ALWAYS_INLINE void keep(Index f, S found) const {
-    clear[f] = moved[f] == pass ? -std::numeric_limits<S>::infinity() : found - drift;
+  DRAPE_ALWAYS_INLINE void keep(Index f, const std::array<Index, 3>& t, S found) const {
+    clear[f] = cornerMoved(t) ? -std::numeric_limits<S>::infinity() : found - drift;
   }
 };
 
@@ -653,7 +657,7 @@ S projectFaceContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, int p
     gate.wait(f);
     const auto& t = triangles[std::size_t(ids[f])];
     if constexpr (kSkip) {
-      if (skip.clearOf(ids[f])) {
+      if (skip.clearOf(ids[f], t)) {
         ++counts.facesCulled;
         ++counts.facesKeptClear;
         continue;
@@ -714,7 +718,7 @@ S projectFaceContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, int p
       if (!((faceHigh.array() >= boxLow.array()).all() && (faceLow.array() <= boxHigh.array()).all())) {
         // Moved by less than the widest gap along an axis, the face's box still misses the grown one.
         if constexpr (kSkip)
-          skip.keep(ids[f], std::max((boxLow - faceHigh).maxCoeff(), (faceLow - boxHigh).maxCoeff()) - boxSlack);
+          skip.keep(ids[f], t, std::max((boxLow - faceHigh).maxCoeff(), (faceLow - boxHigh).maxCoeff()) - boxSlack);
         ++counts.facesCulled;
         continue;
       }
@@ -723,7 +727,7 @@ S projectFaceContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, int p
     [[maybe_unused]] S clearance = 0;
     if (!queryFace<kCull, kSkip>(solid.sdf, x[t[0]], x[t[1]], x[t[2]], thickness, pgdIterations, q, exactSearch,
                                  &clearance)) {
-      if constexpr (kSkip) skip.keep(ids[f], clearance);
+      if constexpr (kSkip) skip.keep(ids[f], t, clearance);
       ++counts.facesCulled;
       ++counts.sdfEvaluations;
       continue;
@@ -782,10 +786,11 @@ S projectFaceContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, int p
         if (g.dot(q.normal) >= S(constants::kMergeCos)) n = g, anchor = p - phi * g;
         if (keepTurn != nullptr) keepTurnAbout(solid.sdf, solid.motion, before, p, keepTurn[t[k]]);
       }
+      // A still solid's (kSkip) surface does not move: its velocity is zero without the products.
       contacts.template record<kBody>(t[k], p, n, dn, solid.motion, anchor,
-                                      solid.motion.contactVelocityAt(p, n, anchor));
+                                      kSkip ? Vec3<S>::Zero() : solid.motion.contactVelocityAt(p, n, anchor));
       moved = std::max(moved, (p - binned[t[k]]).squaredNorm());
-      if constexpr (kSkip) skip.markAfter(ids[f], t[k]);
+      if constexpr (kSkip) skip.stamp(t[k]);
     }
   }
   counts.facesTested += gate.share(count);
