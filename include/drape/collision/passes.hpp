@@ -60,7 +60,7 @@ template <Scalar S> class ContactPasses {
     bins_.setTopology(triangles, vertexCount, cell);
     every_.resize(std::max(std::size_t(vertexCount), triangles.size()));
     for (std::size_t k = 0; k < every_.size(); ++k) every_[k] = Index(k);
-    movedMarks_.assign(std::size_t(vertexCount), 0u);
+    movedStamps_.assign(std::size_t(vertexCount), 0u);
     wave_.forget();
     facePass_ = 0;
   }
@@ -227,11 +227,11 @@ template <Scalar S> class ContactPasses {
           if (!whole_) bins_.faces(x, solid.boxLow, solid.boxHigh, thickness + reach, nearFaces_);
           skip_ = {};
           if (kept_ != nullptr) {
-            if (++facePass_ == 0) {  // wrapped: no mark may look like this pass's
+            if (++facePass_ == 0) {  // wrapped: no stamp may look like this pass's
               facePass_ = 1;
-              std::fill(movedMarks_.begin(), movedMarks_.end(), 0u);
+              std::fill(movedStamps_.begin(), movedStamps_.end(), 0u);
             }
-            skip_ = {kept_->faces.data(), bins_.drift(), movedMarks_.data(), facePass_};
+            skip_ = {kept_->faces.data(), bins_.drift(), movedStamps_.data(), facePass_};
           }
         }
       }
@@ -347,7 +347,7 @@ template <Scalar S> class ContactPasses {
   VertexBins<S> bins_;
   std::vector<Index> nearVertices_, nearFaces_;  ///< what the bins found near the current solid
   std::vector<Index> every_;  ///< 0, 1, 2, ...: every vertex and face, for a solid that holds most of the cloth
-  std::vector<std::uint32_t> movedMarks_;        ///< by vertex (KeptClearance::moved)
+  std::vector<std::uint32_t> movedStamps_;        ///< by vertex (KeptClearance::moved)
   std::uint32_t facePass_ = 0;                   ///< face passes with kept clearances so far
   KeptClearance<S> skip_;                        ///< the current face pass's (shared by the team)
   FaceWave wave_;                                ///< the face passes' plan for a team

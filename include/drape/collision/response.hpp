@@ -274,9 +274,8 @@ template <Scalar S> struct SweepInputs {
 template <Scalar S> struct KeptClearance {
   S* clear = nullptr;  ///< by face index; -infinity where the face was not culled or not yet tested
   S drift = 0;
-  /// By vertex index: `pass` where a face of this pass moved the vertex. Integers, so that the stamps' stores
-  /// cannot alias the positions the pass reads. One store per moved corner, where marking the faces after it
-  /// around the corner cost a loop over them (a tenth of a contact face's time on a ball).
+  /// By vertex index: `pass` where a face of this pass moved the vertex (one store per moved corner). Integers, so
+  /// that the stamps' stores cannot alias the positions the pass reads.
   std::uint32_t* moved = nullptr;
   std::uint32_t pass = 0;
   /// Whether a corner of face t has moved in this pass.
