@@ -123,9 +123,10 @@ template <Scalar S> struct ContactBuffer {
   /// solidVelocity: m.velocityAt(x) for a vertex contact, m.contactVelocityAt(x, n, anchor) for the others, which
   /// a vertex contact need not pay for). kBody: the solid is a coupled body (m.body >= 0), whose slots
   /// keep a ContactLine; other solids' contacts write none, so a scene without bodies does not pay for them. A
-  /// vertex's first contact of the substep (nearly every one) takes the inlined path; further ones merge in
-  /// recordMore.
-  template <bool kBody>
+  /// vertex's first contact of the substep takes the inlined path; further ones merge in recordMore, but for
+  /// kRepeats (the face pass, whose corners are mostly recorded already) the same surface seen again by a
+  /// one-slot vertex, updated inline as recordMore would.
+  template <bool kBody, bool kRepeats = false>
   DRAPE_ALWAYS_INLINE void record(Index i, const Vec3<S>& x, const Vec3<S>& n, S dn, const SolidMotion<S>& m,
                                   const Vec3<S>& anchor, const Vec3<S>& vc) {
     if (stamp[i] != current) {
@@ -134,6 +135,18 @@ template <Scalar S> struct ContactBuffer {
       slots[i][0] = {n, vc, dn, m.staticFriction, m.dynamicFriction, n.dot(x), m.body};
       if constexpr (kBody) lines[i][0] = {n, (anchor - m.centre).cross(n)};
       return;
+    }
+    if constexpr (kRepeats && !kBody) {
+      // recordMore's update of its one slot, without the call (docs/design.md §3, "Speed").
+      ContactSlot<S>& only = slots[i][0];
+      if (slotCount[i] == 1 && only.normal.dot(n) >= kMergeCos) {
+        only.normal = n;
+        only.offset = n.dot(x);
+        only.body = m.body;
+        only.solidVelocity = vc;
+        only.correction += dn;
+        return;
+      }
     }
     recordMore<kBody>(i, x, n, dn, m, anchor, vc);
   }
@@ -786,8 +799,8 @@ S projectFaceContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, int p
         if (keepTurn != nullptr) keepTurnAbout(solid.sdf, solid.motion, before, p, keepTurn[t[k]]);
       }
       // A still solid's (kSkip) surface does not move: its velocity is zero without the products.
-      contacts.template record<kBody>(t[k], p, n, dn, solid.motion, anchor,
-                                      kSkip ? Vec3<S>::Zero() : solid.motion.contactVelocityAt(p, n, anchor));
+      contacts.template record<kBody, true>(t[k], p, n, dn, solid.motion, anchor,
+                                            kSkip ? Vec3<S>::Zero() : solid.motion.contactVelocityAt(p, n, anchor));
       moved = std::max(moved, (p - binned[t[k]]).squaredNorm());
       if constexpr (kSkip) skip.stamp(t[k]);
     }
