@@ -137,14 +137,9 @@ template <Scalar S> struct ContactBuffer {
       return;
     }
     if constexpr (kRepeats && !kBody) {
-      // recordMore's update of its one slot, without the call (docs/design.md §3, "Speed").
-      ContactSlot<S>& only = slots[i][0];
-      if (slotCount[i] == 1 && only.normal.dot(n) >= kMergeCos) {
-        only.normal = n;
-        only.offset = n.dot(x);
-        only.body = m.body;
-        only.solidVelocity = vc;
-        only.correction += dn;
+      // recordMore's answer for its one slot, without the call (docs/design.md §3, "Speed").
+      if (slotCount[i] == 1 && slots[i][0].normal.dot(n) >= kMergeCos) {
+        seenAgain(slots[i][0], x, n, dn, m, vc);
         return;
       }
     }
@@ -152,6 +147,15 @@ template <Scalar S> struct ContactBuffer {
   }
 
  private:
+  /// The same surface seen again: the slot takes its latest normal, placement and velocity, and adds the push.
+  DRAPE_ALWAYS_INLINE static void seenAgain(ContactSlot<S>& slot, const Vec3<S>& x, const Vec3<S>& n, S dn,
+                                            const SolidMotion<S>& m, const Vec3<S>& vc) {
+    slot.normal = n;
+    slot.offset = n.dot(x);
+    slot.body = m.body;
+    slot.solidVelocity = vc;
+    slot.correction += dn;
+  }
   template <bool kBody>
   void recordMore(Index i, const Vec3<S>& x, const Vec3<S>& n, S dn, const SolidMotion<S>& m, const Vec3<S>& anchor,
                   const Vec3<S>& vc) {
@@ -205,13 +209,12 @@ template <Scalar S> struct ContactBuffer {
         line.moment += share * ((anchor - m.centre).cross(n) - line.moment);
       }
     }
-    if (bestCos >= kMergeCos) {  // the same surface, seen again: its latest normal and placement
-      own[best].normal = n;
-      own[best].offset = n.dot(x);
-      own[best].body = m.body;
-    } else {  // another direction joins the slot, whose normal stays
-      own[best].offset = std::max(own[best].offset, own[best].normal.dot(x));
+    if (bestCos >= kMergeCos) {
+      seenAgain(own[best], x, n, dn, m, vc);
+      return;
     }
+    // Another direction joins the slot, whose normal stays.
+    own[best].offset = std::max(own[best].offset, own[best].normal.dot(x));
     own[best].solidVelocity = vc;
     own[best].correction += dn;
   }
