@@ -1,4 +1,4 @@
-// docs/design.md §6, phase 2, per vertex (the CPU twin: gatherContactForces with pinchSupport, pinchingSlot,
+// docs/design.md §6, phase 2, per vertex (the CPU twin: gatherContactForces with pinchSupport, pinchingSlot, spacerOf,
 // unresolvedOverlap, contactPoint, addWrench, addExchange, ownShare, addSplitExchange and gatherPropagatedImpulse in
 // include/drape/coupling/contact_forces.hpp): what each contact vertex passes to the coupled bodies it touches, by
 // the chosen estimator (sub-force, energy-based, impulse-based), reversed onto the body at the contact's line;
@@ -9,8 +9,9 @@
 // corrected it most (an exchange, which shareExchanges may scale); a vertex between two bodies, or a body and a
 // fixed solid, passes each body the part of its change that body's slot made (ownShare), as an exchange of that
 // part, unless it is pinched against a fixed solid or another body facing the body, which then holds the body
-// through it (a pinch). With the impulse estimator and propagation, a vertex not in contact passes what
-// propagation gave it to the body of its first neighbour in contact with one.
+// through it (a pinch), and is listed as a spacer for the rigid world (appended: the solver sorts them). With the
+// impulse estimator and propagation, a vertex not in contact passes what propagation gave it to the body of its
+// first neighbour in contact with one.
 layout(local_size_x = DRAPE_WORKGROUP) in;
 layout(std430, binding = DRAPE_B_POSITIONS) readonly buffer Positions { vec4 x[]; };
 layout(std430, binding = DRAPE_B_VELOCITIES) readonly buffer Velocities { vec4 v[]; };
@@ -23,6 +24,8 @@ layout(std430, binding = DRAPE_B_NEIGHBOUR_OFFSETS) readonly buffer NeighbourOff
 layout(std430, binding = DRAPE_B_NEIGHBOURS) readonly buffer Neighbours { uint neighbours[]; };
 layout(std430, binding = DRAPE_B_BODIES) readonly buffer Bodies { Body bodies[]; };
 layout(std430, binding = DRAPE_B_PUSHES) writeonly buffer Pushes { BodyPush pushes[]; };
+// spacers[0] is the header: vertex counts the records after it, body is their room.
+layout(std430, binding = DRAPE_B_SPACERS) buffer Spacers { SpacerRecord spacers[]; };
 layout(location = DRAPE_U_COUNT) uniform uint count;
 layout(location = DRAPE_U_STEP) uniform float h;
 layout(location = DRAPE_U_THICKNESS) uniform float thickness;
@@ -112,6 +115,18 @@ int pinchingSlot(uint i, int k) {
   return fixedSlot >= 0 ? fixedSlot : bodySlot;
 }
 
+// Vertex i pinched between slot k's body and slot o's surface, as a spacer (spacerOf): each slot's plane lies a
+// thickness out of its surface (velocity.w: where the vertex was placed along the normal).
+void addSpacer(uint i, int k, int o) {
+  const int at = atomicAdd(spacers[0].vertex, 1);
+  if (at >= spacers[0].body) return;  // no room: the room is one record per contact slot of every vertex
+  const Contact c = contacts[i];
+  const vec3 xi = x[i].xyz, nk = c.normal[k].xyz, no = c.normal[o].xyz;
+  precise const vec3 onBody = xi - (dot3(nk, xi) - c.velocity[k].w + thickness) * nk;
+  precise const vec3 onOther = xi + ((DRAPE_SPACER_GAP - 1.0) * thickness - (dot3(no, xi) - c.velocity[o].w)) * no;
+  spacers[1 + at] = SpacerRecord(vec4(onBody, 0.0), vec4(onOther, 0.0), vec4(no, 0.0), int(i), c.body[k], c.body[o], k);
+}
+
 mat3 inverseInertiaOf(Body body) {
   return transpose(mat3(body.inverseInertia[0].xyz, body.inverseInertia[1].xyz, body.inverseInertia[2].xyz));
 }
@@ -124,6 +139,7 @@ bool pinchSupport(uint i, int k) {
   const vec3 n = c.normal[k].xyz;
   const int against = pinchingSlot(i, k);
   if (against < 0) return false;
+  if (c.body[against] < c.body[k]) addSpacer(i, k, against);
   const Body body = bodies[c.body[k]];
   const vec3 r = contactPoint(i, k, body);
   const mat3 inverseInertia = inverseInertiaOf(body);

@@ -57,6 +57,7 @@ TEST_CASE("every shared constant reaches the shaders as the float the CPU kernel
                {"DRAPE_FEATURE_MIN_RATE", c::kFeatureMinRate},
                {"DRAPE_PINCH_RATE", c::kPinchRate},
                {"DRAPE_PINCH_OPPOSING_COS", c::kPinchOpposingCos},
+               {"DRAPE_SPACER_GAP", c::kSpacerGap},
                {"DRAPE_SPLIT_GRAM_MIN", c::kSplitGramMin},
                {"DRAPE_LINE_MIN_ALONG", c::kLineMinAlong},
                {"DRAPE_ENERGY_MIN_DISPLACEMENT2", c::kEnergyMinDisplacement2}};

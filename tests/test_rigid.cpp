@@ -562,6 +562,90 @@ TEST_CASE("a stack of three boxes stays stacked", "[rigid]") {
   CHECK(maxHeightError < 1e-3);
 }
 
+TEST_CASE("a spacer holds a body pressed by another off the ground, for its life, and bad ones are refused",
+          "[rigid]") {
+  // A light box under a heavy one, each substep given a spacer that keeps its bottom 1 cm off the ground (what a
+  // cloth pinched under it passes, RigidWorld::addSpacer): the pair's contact pushes the light box down in the
+  // solve, and the spacer, solved after the world's own contacts, lifts it back within the substep.
+  const Vector3d lowHalf(0.02, 0.02, 0.01), topHalf(0.02, 0.02, 0.02);
+  const double lift = 0.01;
+  auto scene = [&](RigidWorld& world) {
+    BodyDesc low{Box{lowHalf}, at(Vector3d(0, 0, lift + lowHalf.z()))};
+    low.density = 600;
+    BodyDesc top{Box{topHalf}, at(Vector3d(0, 0, lift + 2 * lowHalf.z() + topHalf.z() + 0.1))};
+    top.density = 2000;
+    world.add(low);
+    world.add(top);
+  };
+  // The four bottom corners of the light box, each its own spacer (tag k).
+  auto hold = [&](RigidWorld& world) {
+    for (int k = 0; k < 4; ++k) {
+      const Vector3d corner((k & 1) ? lowHalf.x() : -lowHalf.x(), (k & 2) ? lowHalf.y() : -lowHalf.y(), -lowHalf.z());
+      const Vector3d below = world.body(0).pose().apply(corner);
+      const Vector3d on(below.x(), below.y(), lift);
+      world.addSpacer(k, RigidWorld::kGround, on, 0, corner, Vector3d::UnitZ(), 0.005);
+    }
+  };
+  RigidWorld held, bare;
+  scene(held);
+  scene(bare);
+  double lowestHeld = 1, lowestBare = 1;
+  for (int s = 0; s < 1000; ++s) {  // 1 s
+    hold(held);
+    held.subStep(0.001);
+    bare.subStep(0.001);
+    lowestHeld = std::min(lowestHeld, held.body(0).pose().position.z() - lowHalf.z());
+    lowestBare = std::min(lowestBare, bare.body(0).pose().position.z() - lowHalf.z());
+  }
+  INFO("the light box's lowest bottom: " << lowestHeld << " m held, " << lowestBare << " m on its own");
+  CHECK(lowestBare < 0.002);            // premise: with nothing under it the box falls to the ground
+  CHECK(lowestHeld >= lift - 5e-4);  // one pass over the four points leaves a residual
+  CHECK(held.body(0).pose().position.z() - lowHalf.z() <= lift + 1e-4);  // and resting on it
+  int spacers = 0;
+  for (const RigidContact& c : held.contacts()) spacers += c.spacer ? 1 : 0;
+  CHECK(spacers == 4);
+  CHECK(held.spacers().size() == 4);
+
+  // Not given again, the spacers still hold for their life, then are dropped and the box falls.
+  for (int s = 0; s < RigidWorld::kSpacerLife - 1; ++s) held.subStep(0.001);
+  CHECK(held.spacers().size() == 4);
+  CHECK(held.body(0).pose().position.z() - lowHalf.z() >= lift - 2e-4);
+  for (int s = 0; s < 200; ++s) held.subStep(0.001);
+  CHECK(held.spacers().empty());
+  CHECK(held.body(0).pose().position.z() - lowHalf.z() < 0.002);
+
+  // A spacer whose body has moved beyond its reach is dropped at once.
+  RigidWorld far;
+  scene(far);
+  far.addSpacer(7, RigidWorld::kGround, Vector3d(0, 0, -0.02), 0, Vector3d(0, 0, -lowHalf.z()), Vector3d::UnitZ(),
+                0.005);
+  far.subStep(0.001);
+  CHECK(far.spacers().empty());
+
+  auto throwsWith = [](auto f, const std::string& what) {
+    try {
+      f();
+    } catch (const Error& e) {
+      return std::string(e.what()).find(what) != std::string::npos;
+    }
+    return false;
+  };
+  RigidWorld world;
+  scene(world);
+  BodyDesc kinematic{Box{lowHalf}, at(Vector3d(1, 0, 1))};
+  kinematic.motion = BodyMotion::Kinematic;
+  const int fixed = world.add(kinematic);
+  const Vector3d p = Vector3d::Zero(), n = Vector3d::UnitZ();
+  CHECK(throwsWith([&] { world.addSpacer(0, 5, p, 0, p, n, 0.01); }, "first body index 5 out of range"));
+  CHECK(throwsWith([&] { world.addSpacer(0, RigidWorld::kGround, p, 9, p, n, 0.01); }, "second body index 9"));
+  CHECK(throwsWith([&] { world.addSpacer(0, 0, p, 0, p, n, 0.01); }, "second body index 0"));
+  CHECK(throwsWith([&] { world.addSpacer(0, RigidWorld::kGround, p, fixed, p, n, 0.01); }, "is not dynamic"));
+  CHECK(throwsWith([&] { world.addSpacer(0, 1, Vector3d(NAN, 0, 0), 0, p, n, 0.01); }, "points must be finite"));
+  CHECK(throwsWith([&] { world.addSpacer(0, 1, p, 0, p, 2 * n, 0.01); }, "normal must be unit"));
+  CHECK(throwsWith([&] { world.addSpacer(0, 1, p, 0, p, n, 0); }, "reach must be positive"));
+  CHECK(world.spacers().empty());
+}
+
 TEST_CASE("a box pushed sideways on the ground obeys Coulomb friction", "[rigid]") {
   // mu = 0.5 for the box and the ground (combined sqrt(a b) = 0.5). Below mu m g it sticks: the static part
   // undoes the substep's tangential displacement, so it must not creep at h F / m per substep. Above, it

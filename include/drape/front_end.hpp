@@ -258,8 +258,26 @@ template <class Backend, Scalar S, class... Shapes> class SolverFront {
   /// substep, in the order the dynamic solids were visited (shape type by shape type, then by index).
   const std::vector<Eigen::Vector3d>& bodyForces() const { return bodyForce_; }
   const std::vector<Eigen::Vector3d>& bodyTorques() const { return bodyTorque_; }
+  /// The coupled bodies of the last substep, in the same order.
+  const std::vector<CoupledBody*>& coupledBodies() const { return bodies_; }
+  /// The cloth's pinches in the last substep, in vertex order: what holds each pinched body off the surface
+  /// behind the cloth (stepCoupled hands them to the rigid world).
+  const std::vector<Spacer>& spacers() const { return spacers_; }
 
  protected:
+  /// Moves the spacers' points from the cloth's local frame into their bodies' frames where the cloth met them
+  /// (a fixed solid's into the world's).
+  void spacersToBodyFrames() {
+    for (Spacer& p : spacers_) {
+      const Pose& body = bodyPose_[std::size_t(p.body)];
+      p.onBody = body.rotation.conjugate() * (p.onBody + state_.origin - body.position);
+      p.onOther += state_.origin;
+      if (p.other >= 0) {
+        const Pose& other = bodyPose_[std::size_t(p.other)];
+        p.onOther = other.rotation.conjugate() * (p.onOther - other.position);
+      }
+    }
+  }
   SolverFront(std::shared_ptr<const ClothAsset<S>> asset, const Settings& settings, double areaDensity)
       : asset_((detail::require(asset != nullptr, "the cloth asset is null"), std::move(asset))),
         settings_((settings.validate(), Backend::checkSettings(settings), settings)),
@@ -314,6 +332,8 @@ template <class Backend, Scalar S, class... Shapes> class SolverFront {
     SolidFeatures has;
     bodies_.clear();
     bodyCentre_.clear();
+    bodyPose_.clear();
+    spacers_.clear();  // the coupling's gather lists this substep's
     has.reconcile = solidCount() > 1;
     std::apply(
         [&](auto&... lists) {
@@ -333,6 +353,7 @@ template <class Backend, Scalar S, class... Shapes> class SolverFront {
                     out[k].motion.body = std::int32_t(bodies_.size());
                     bodies_.push_back(held.body);
                     bodyCentre_.push_back(held.pose.position);  // the field's centre, not the body's now
+                    bodyPose_.push_back(held.pose);
                   }
                   f(std::as_const(out[k]), std::as_const(held));
                 }
@@ -358,7 +379,9 @@ template <class Backend, Scalar S, class... Shapes> class SolverFront {
   /// velocity over the substep); torques are taken about them, so a force along a field's normal through a
   /// ball's centre has no moment.
   std::vector<Eigen::Vector3d> bodyCentre_;
+  std::vector<Pose> bodyPose_;  ///< their poses there, which the spacers' points are taken in
   std::vector<Eigen::Vector3d> bodyForce_, bodyTorque_;  ///< what the cloth passed to each, this substep
+  std::vector<Spacer> spacers_;  ///< this substep's pinches (spacers())
   StepStart start_;  ///< the start of a step that may be undone
 };
 

@@ -108,6 +108,10 @@ inline constexpr double kSettleSlack = 1e-4;
 inline constexpr double kPinchRate = 0.2;
 /// A fixed solid pinches a vertex against a body when their normals' cosine is below this.
 inline constexpr double kPinchOpposingCos = -0.5;
+/// A pinch's spacer keeps the body this many thicknesses off the surface behind the cloth: a quarter short of
+/// the cloth's two, so that a body resting on the cloth is held by the pinch's support alone and the spacer
+/// acts only where another body presses it further (RigidWorld::addSpacer).
+inline constexpr double kSpacerGap = 1.75;
 /// A vertex touching several solids has its velocity change split among their normals where the normals' Gram
 /// determinant (the squared volume they span) is above this; below it (surfaces facing each other), each slot
 /// takes its whole normal part.

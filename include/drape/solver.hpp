@@ -144,6 +144,7 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
       vStart_.resize(state_.v.size());
       vPre_.resize(state_.v.size());
       exchanged_.reserve(state_.v.size() * std::size_t(constants::kContactSlots));
+      this->spacers_.reserve(state_.v.size());
     }
   }
 
@@ -398,8 +399,9 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
                                         settings_.contactForce,
                                         settings_.normalForceOnly,
                                         coupling::passesPropagatedImpulse(settings_)};
-    coupling::Gathered out{bodyForce_, bodyTorque_, bodySums_, exchanged_};
+    coupling::Gathered out{bodyForce_, bodyTorque_, bodySums_, exchanged_, this->spacers_};
     coupling::gatherContactForces(view, out);
+    this->spacersToBodyFrames();
     coupling::shareExchanges(bodies_, bodySums_, exchanged_, bodyForce_, bodyTorque_, state_.v.data(), vPre_.data());
     coupling::addPinches(bodySums_, bodyForce_, bodyTorque_);
   }

@@ -8,6 +8,7 @@
 #include <drape/coupling/rigid_world.hpp>
 
 #include "../coupling_helpers.hpp"
+#include "pinch_stack.hpp"
 #include "rigid_rain.hpp"
 
 #include <catch2/catch.hpp>
@@ -354,6 +355,97 @@ TEST_CASE("the rigid rain on the GPU keeps the CPU's invariants over 2 s: no bod
   CHECK(gpuSheet.crossings() == 0);
   CHECK(cpuSheet.crossings() == 0);
   CHECK(cpuThrough2 == 0);
+}
+
+TEST_CASE("coupling on the GPU: a box that another lands on is held off the floor by the cloth under it", "[gpu]") {
+  // The CPU test's scene and bounds (scenes/pinch_stack.hpp, a 10 cm drop): the pinches reach the rigid world as
+  // spacers from contact_forces.comp's records.
+  using drape::scenes::PinchStack;
+  drape::gpu::Solver cloth(drape::test::gpuContext(), PinchStack::asset<float>(), PinchStack::settings(), 0.1);
+  const PinchStack::Reading r = PinchStack::run(&cloth, 0.1, 1);
+  INFO("lowest gap " << r.lowestGap << " m, final " << r.finalGap << " m, deepest cloth vertex in a box " << r.deepest
+                     << " m, moved " << r.shift << " m");
+  CHECK(r.stepsOff == 0);
+  CHECK(r.lowestGap >= 1.5 * PinchStack::kThickness);
+  CHECK(r.finalGap >= drape::constants::kSpacerGap * PinchStack::kThickness - 5e-4);
+  CHECK(r.finalGap <= 2 * PinchStack::kThickness + 5e-4);
+  CHECK(r.deepest <= 1e-3);
+}
+
+TEST_CASE("contact_forces.comp lists the pinches as spacers as the CPU's spacerOf does from the same contacts",
+          "[gpu]") {
+  // A box held still 1.5 thicknesses over a cloth on the floor, so that the vertices under it are pinched, and a
+  // ball resting on the cloth beside it (one body's contacts only: no spacers). Each substep, the GPU's spacers
+  // against the CPU functions (pinchingSlot, spacerOf) run on the GPU's own contact records and positions, the
+  // points put in the box's frame by its pose (still, so the pose the cloth met it at). The coupled bodies are
+  // numbered shape type by shape type: the ball is 0.
+  drape::Settings settings;
+  drape::gpu::Solver cloth(drape::test::gpuContext(), squareCloth(21, 0.02, settings.thickness), settings);
+  cloth.addSolid(drape::Solid<drape::Plane>{});
+  drape::RigidWorld world;
+  drape::BodyDesc box;
+  box.shape = drape::Box{{0.06, 0.05, 0.03}};
+  box.pose.position = {0.013, -0.007, 1.5 * settings.thickness + 0.03};
+  box.pose.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()));
+  drape::BodyDesc ball;
+  ball.shape = drape::Sphere{0.04};
+  ball.pose.position = {-0.13, 0.1, 2 * settings.thickness + 0.04};
+  drape::addCoupledBody(cloth, world, world.add(box));
+  drape::addCoupledBody(cloth, world, world.add(ball));
+  std::size_t compared = 0;
+  double worst = 0;
+  bool sameList = true;
+  cloth.step(0.01, [&](const drape::gpu::Solver& c) {
+    const std::vector<drape::gpu::layout::Contact> records = c.contactBuffer().read();
+    const auto& x = c.state().x;
+    drape::ContactBuffer<float> contacts;
+    contacts.resize(Index(records.size()));
+    contacts.begin();
+    for (std::size_t i = 0; i < records.size(); ++i) {
+      const auto& r = records[i];
+      if (r.slots[0] == 0) continue;
+      contacts.stamp[i] = contacts.current;
+      contacts.slotCount[i] = std::uint8_t(r.slots[0]);
+      for (unsigned k = 0; k < r.slots[0]; ++k) {
+        auto& slot = contacts.slots[i][k];
+        slot.normal = drape::Vec3<float>(r.normal[k][0], r.normal[k][1], r.normal[k][2]);
+        slot.offset = r.velocity[k][3];
+        slot.body = r.body[k];
+      }
+    }
+    std::vector<drape::Spacer> expected;
+    for (Index i = 0; i < Index(records.size()); ++i) {
+      if (!contacts.live(i) || contacts.slotCount[i] < 2) continue;
+      const auto& slots = contacts.slots[i];
+      bool oneBody = true;
+      for (int k = 1; k < contacts.slotCount[i]; ++k) oneBody = oneBody && slots[k].body == slots[0].body;
+      if (oneBody) continue;
+      for (int k = 0; k < contacts.slotCount[i]; ++k) {
+        const int o = slots[k].body < 0 ? -1 : drape::coupling::pinchingSlot(contacts, i, k);
+        if (o < 0 || !(slots[o].body < slots[k].body)) continue;
+        const float t = float(settings.thickness);
+        drape::Spacer p = drape::coupling::spacerOf(i, k, x[std::size_t(i)], t, slots[k], slots[o]);
+        const drape::Pose pose = c.coupledBodies()[std::size_t(p.body)]->pose();
+        p.onBody = pose.rotation.conjugate() * (p.onBody + c.origin() - pose.position);
+        p.onOther += c.origin();
+        expected.push_back(p);
+      }
+    }
+    const std::vector<drape::Spacer>& got = c.spacers();
+    sameList = sameList && got.size() == expected.size();
+    for (std::size_t k = 0; k < std::min(got.size(), expected.size()); ++k) {
+      sameList = sameList && got[k].vertex == expected[k].vertex && got[k].body == expected[k].body &&
+                 got[k].other == expected[k].other && got[k].slot == expected[k].slot;
+      const double off = std::max({(got[k].onBody - expected[k].onBody).norm(),
+                        (got[k].onOther - expected[k].onOther).norm(), (got[k].normal - expected[k].normal).norm()});
+      worst = std::max(worst, off);
+    }
+    compared += expected.size();
+  });
+  INFO(compared << " spacers compared over the step's substeps; largest difference " << worst);
+  CHECK(compared >= 10 * 9);  // premise: the box pinches the cloth under it in every substep
+  CHECK(sameList);
+  CHECK(worst <= 1e-6);
 }
 
 TEST_CASE("two GPU runs of a coupled scene are bit-identical (the body sums have one order)", "[gpu]") {

@@ -11,6 +11,8 @@
 
 #include <drape/math.hpp>
 
+#include <cstdint>
+
 namespace drape {
 
 class CoupledBody {
@@ -50,6 +52,21 @@ class CoupledBody {
   Eigen::Vector3d velocityAt(const Eigen::Vector3d& point) const {
     return linearVelocity() + angularVelocity().cross(point - pose().position);
   }
+};
+
+/// A cloth vertex pinched in the last substep between coupled body `body` and a surface facing it, a fixed
+/// solid's (`other` -1) or another coupled body's (`other`, by the higher index's record only), as a spacer for a
+/// rigid world's next substep (RigidWorld::addSpacer, which stepCoupled calls): the body's surface beside the
+/// vertex stays constants::kSpacerGap thicknesses (nearly the cloth's two) off the other surface along that
+/// surface's normal. Bodies are numbered as bodyForces() lists them. Taken from the two contacts' planes: `onBody`
+/// on the body's surface, in its frame where the cloth met it; `onOther` that far out of the other surface, in the
+/// other body's frame (world for a fixed solid); `normal` the other surface's (world). docs/design.md §6.
+struct Spacer {
+  std::int32_t vertex = 0;
+  std::int32_t body = -1, other = -1;
+  std::int32_t slot = 0;  ///< the vertex's contact slot of the body: a vertex on two faces of a box has two
+  Eigen::Vector3d onBody = Eigen::Vector3d::Zero(), onOther = Eigen::Vector3d::Zero();
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
 };
 
 }  // namespace drape

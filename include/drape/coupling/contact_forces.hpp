@@ -55,12 +55,13 @@ struct Exchanged {
 
 /// What one substep's estimates add up to: the direct pushes go into `force` and `torque` (which hold the
 /// repulsion region's already), exchanges and pinches into `sums`, and `exchanged` lists each exchanged vertex
-/// with its body.
+/// with its body; each pinch is listed in `spacers`.
 struct Gathered {
   std::vector<Eigen::Vector3d>& force;
   std::vector<Eigen::Vector3d>& torque;
   std::vector<BodySums>& sums;
   std::vector<Exchanged>& exchanged;
+  std::vector<Spacer>& spacers;
 };
 
 /// Where slot c's push acts on its body, from the body's centre (world axes): on the line along the slot's
@@ -169,6 +170,23 @@ template <Scalar S> int pinchingSlot(const ContactBuffer<S>& contacts, Index i, 
   return fixed >= 0 ? fixed : body;
 }
 
+/// Vertex i at x pinched between its slot k (c), a body's, and slot o's surface, as a spacer with its points in the cloth's
+/// local frame (SolverFront::spacersToBodyFrames moves them). Each slot's plane lies a thickness t out of its
+/// surface (`offset`: where the vertex was placed along the normal); `onOther` lies kSpacerGap thicknesses out.
+template <Scalar S>
+Spacer spacerOf(Index i, int k, const Vec3<S>& x, S t, const ContactSlot<S>& c, const ContactSlot<S>& o) {
+  Spacer p;
+  p.vertex = std::int32_t(i);
+  p.slot = std::int32_t(k);
+  p.body = c.body;
+  p.other = o.body;
+  p.onBody = (x - (c.normal.dot(x) - c.offset + t) * c.normal).template cast<double>();
+  const S out = S(constants::kSpacerGap - 1) * t - (o.normal.dot(x) - o.offset);
+  p.onOther = (x + out * o.normal).template cast<double>();
+  p.normal = o.normal.template cast<double>();
+  return p;
+}
+
 /// A vertex held between slot k's body and a surface facing it cannot pass on that surface's push through its
 /// own momentum: its mass is far too small, and the estimates would hand the body a force of about
 /// m_vertex / h^2 per metre of overlap, which let a ball sink through a cloth lying on the floor to the floor
@@ -187,6 +205,7 @@ template <Scalar S> bool pinchSupport(const SubstepView<S>& s, Index i, int k, G
   const int against = pinchingSlot(s.contacts, i, k);
   if (against < 0) return false;
   const ContactSlot<S>& o = slots[against];
+  if (o.body < c.body) out.spacers.push_back(spacerOf(i, k, s.state.x[i], s.thickness, c, o));
   const CoupledBody& body = *s.bodies[std::size_t(c.body)];
   const Eigen::Vector3d n = c.normal.template cast<double>();
   const Eigen::Vector3d r = contactPoint(s, c, i);
@@ -295,6 +314,7 @@ template <Scalar S> Vec3<S> energyForceOn(const SubstepView<S>& s, Index i, S m,
 template <Scalar S> void gatherContactForces(const SubstepView<S>& s, Gathered& out) {
   out.sums.assign(s.bodies.size(), BodySums{});
   out.exchanged.clear();
+  out.spacers.clear();
   const Index n = Index(s.state.x.size());
   for (Index i = 0; i < n; ++i) {
     if (!s.contacts.live(i)) {

@@ -3,10 +3,12 @@
 // per body, and a step that interleaves the two solvers substep by substep, so the forces the cloth estimates in a
 // substep act on the bodies in that same substep.
 
+#include <drape/kernel_constants.hpp>
 #include <drape/rigid/world.hpp>
 #include <drape/sdf/solid.hpp>
 
 #include <type_traits>
+#include <utility>
 #include <variant>
 #include <vector>
 
@@ -51,8 +53,33 @@ Index addCoupledBody(ClothSolver& cloth, RigidWorld& world, int index, const Cou
       body.shape());
 }
 
+namespace detail {
+
+/// Hands the world the cloth's pinches of the substep just taken as spacers (RigidWorld::addSpacer, the vertex's
+/// slot as the tag and a thickness as the reach), for bodies of this world; `index` maps each of the cloth's coupled
+/// bodies to its index in the world (-1 for another's).
+template <class ClothSolver> void passSpacers(const ClothSolver& cloth, RigidWorld& world, std::vector<int>& index) {
+  const std::vector<CoupledBody*>& coupled = cloth.coupledBodies();
+  if (index.size() != coupled.size()) {
+    index.assign(coupled.size(), -1);
+    for (std::size_t b = 0; b < coupled.size(); ++b)
+      for (int w = 0; w < world.bodyCount(); ++w)
+        if (coupled[b] == &world.body(w)) index[b] = w;
+  }
+  const double reach = cloth.settings().thickness;
+  for (const Spacer& p : cloth.spacers()) {
+    const int body = index[std::size_t(p.body)];
+    const int other = p.other < 0 ? RigidWorld::kGround : index[std::size_t(p.other)];
+    if (body >= 0 && (p.other < 0 || other >= 0))
+      world.addSpacer(std::int64_t(p.vertex) * constants::kContactSlots + p.slot, other, p.onOther, body, p.onBody, p.normal, reach);
+  }
+}
+
+}  // namespace detail
+
 /// Advances the cloth and the world by dt together: after each cloth substep has applied its contact forces,
-/// the world takes the same substep (its own subStepCount is not used). `onSubStep(cloth)` runs after both. A
+/// the world takes the same substep (its own subStepCount is not used), holding each body the cloth pinches
+/// against a surface off it by the cloth (the solver's spacers()). `onSubStep(cloth)` runs after both. A
 /// drape::Error in any substep (a body turned non-finite) leaves the cloth, its solids and the world's bodies as
 /// they were before the step.
 template <class ClothSolver, class Observer>
@@ -60,12 +87,16 @@ void stepCoupled(ClothSolver& cloth, RigidWorld& world, double dt, Observer&& on
   const double h = dt / cloth.settings().subStepCount;
   std::vector<BodyState> start(std::size_t(world.bodyCount()));
   for (int b = 0; b < world.bodyCount(); ++b) start[std::size_t(b)] = world.body(b).state;
+  RigidWorld::Spacers spacers = world.spacers();
+  std::vector<int> index;
   try {
     cloth.step(dt, [&](const ClothSolver& c) {
+      detail::passSpacers(c, world, index);
       world.subStep(h);
       onSubStep(c);
     });
   } catch (const Error&) {
+    world.restoreSpacers(std::move(spacers));
     for (int b = 0; b < world.bodyCount(); ++b) {
       world.body(b).state = start[std::size_t(b)];
       world.body(b).clearForces();

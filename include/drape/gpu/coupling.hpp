@@ -12,6 +12,8 @@
 #include <drape/gpu/shader_sources.hpp>
 #include <drape/settings.hpp>
 
+#include <algorithm>
+#include <tuple>
 #include <vector>
 
 namespace drape::gpu {
@@ -36,6 +38,8 @@ class BodyCoupling {
       vPre_.assign(zero);
       lines_.assign(std::vector<layout::Lines>(vertices, layout::Lines{}));
       pushes_.assign(std::vector<layout::BodyPush>(vertices * layout::kContactSlots, layout::BodyPush{}));
+      // A header, then room for one record per contact slot of every vertex.
+      spacers_.assign(std::vector<layout::SpacerRecord>(vertices * layout::kContactSlots + 1, layout::SpacerRecord{}));
     }
   }
   void bind() const {
@@ -45,6 +49,7 @@ class BodyCoupling {
     vPre_.bind(layout::kVPre);
     lines_.bind(layout::kLines);
     pushes_.bind(layout::kPushes);
+    spacers_.bind(layout::kSpacers);
   }
   /// The velocities at the start of the substep, and before the contacts act (what the estimators compare).
   void keepStartVelocities(const Buffer<layout::Vertex>& v, std::size_t count) const { copy(v, vStart_, count); }
@@ -65,10 +70,15 @@ class BodyCoupling {
   /// shared with the vertices that made it (share.comp scales those vertices' changes where a body took less than
   /// all); the forces, added to what `force` and `torque` hold (the repulsion's), applied to the bodies before
   /// they move and left in `force` and `torque`. `centres` are the bodies' centres (world), `origin` the cloth's.
+  /// The pinches are listed in `spacers`, in the cloth's local frame, sorted by vertex and slot.
   void gather(const std::vector<CoupledBody*>& bodies, const std::vector<Eigen::Vector3d>& centres,
               const Eigen::Vector3d& origin, const Settings& settings, float h, unsigned vertexCount,
-              std::vector<Eigen::Vector3d>& force, std::vector<Eigen::Vector3d>& torque) {
+              std::vector<Eigen::Vector3d>& force, std::vector<Eigen::Vector3d>& torque,
+              std::vector<Spacer>& spacers) {
     upload(bodies, centres, origin);
+    layout::SpacerRecord header{};
+    header.body = std::int32_t(spacers_.size() - 1);
+    spacers_.write({header});
     const ContactForce estimator = settings.contactForce;
     contactForces_.set(layout::kCount, vertexCount);
     contactForces_.set(layout::kStep, h);
@@ -82,6 +92,7 @@ class BodyCoupling {
     contactForces_.dispatch(vertexCount);
     const std::size_t nb = bodies.size();
     const std::vector<layout::BodySum> sums = sumPushes(0, int(nb), vertexCount);
+    readSpacers(spacers);
     std::vector<float> share(nb, 1.0f);
     bool partial = false;
     const auto vec = [](const double* v) { return Eigen::Vector3d(v[0], v[1], v[2]); };
@@ -106,6 +117,30 @@ class BodyCoupling {
   }
 
  private:
+  /// The pinches contact_forces.comp appended (after sumPushes' barrier), in the CPU's order.
+  void readSpacers(std::vector<Spacer>& out) const {
+    const std::size_t appended = std::size_t(spacers_.read(0, 1)[0].vertex);
+    const std::size_t count = std::min(appended, spacers_.size() - 1);
+    out.clear();
+    if (count == 0) return;
+    const std::vector<layout::SpacerRecord> records = spacers_.read(1, count);
+    const auto vec = [](const float* v) { return Eigen::Vector3d(v[0], v[1], v[2]); };
+    for (const layout::SpacerRecord& r : records) {
+      Spacer p;
+      p.vertex = r.vertex;
+      p.body = r.body;
+      p.other = r.other;
+      p.slot = r.slot;
+      p.onBody = vec(r.onBody);
+      p.onOther = vec(r.onOther);
+      p.normal = vec(r.normal);
+      out.push_back(p);
+    }
+    std::sort(out.begin(), out.end(), [](const Spacer& a, const Spacer& b) {
+      return std::tie(a.vertex, a.slot) < std::tie(b.vertex, b.slot);
+    });
+  }
+
   /// The bodies as the force kernel reads them: centres in the cloth's local frame, velocities, inverse mass and
   /// inverse inertia in world axes.
   void upload(const std::vector<CoupledBody*>& bodies, const std::vector<Eigen::Vector3d>& centres,
@@ -134,6 +169,7 @@ class BodyCoupling {
   Buffer<layout::Vertex> vStart_, vPre_;  ///< velocities at the substep's start, before the contacts
   Buffer<layout::Lines> lines_;
   Buffer<layout::BodyPush> pushes_;
+  Buffer<layout::SpacerRecord> spacers_;  ///< a header, then this substep's pinches
   Buffer<layout::Body> bodyData_;
   Buffer<layout::BodySum> sums_;
   Buffer<float> shares_;

@@ -51,6 +51,7 @@ enum Binding : unsigned {
   kGuardMarks = 25,       ///< uint per vertex: 1 where a face the guard caught goes back to kGuardFrom
   kHeld = 26,             ///< vec4 per face, colour by colour: where it was last deepest in a solid (barycentric),
                           ///<   w = that solid's place + 1, 0 for none (HeldPoints)
+  kSpacers = 27,          ///< SpacerRecord: a header (vertex: how many follow; body: room) and this substep's pinches
 };
 
 /// Uniform locations (set per dispatch with glProgramUniform*).
@@ -144,6 +145,19 @@ struct BodyPush {
   std::int32_t body, kind, slot, pad;
 };
 static_assert(sizeof(BodyPush) == 48 && offsetof(BodyPush, torque) == 16 && offsetof(BodyPush, body) == 32);
+
+/// A pinch as a rigid world's spacer (drape::Spacer, coupling::spacerOf): the points on the body's surface and
+/// kSpacerGap thicknesses out of the other surface (m, the cloth's local frame), the other surface's normal, the
+/// vertex, the two bodies (other -1 for a fixed solid) and the body's slot. Appended in any order; the solver
+/// sorts them.
+struct SpacerRecord {
+  float onBody[4];
+  float onOther[4];
+  float normal[4];
+  std::int32_t vertex, body, other, slot;
+};
+static_assert(sizeof(SpacerRecord) == 64 && offsetof(SpacerRecord, normal) == 32 &&
+              offsetof(SpacerRecord, vertex) == 48);
 
 /// A coupled body as the force kernel reads it: its centre (m, the cloth's local frame) with its inverse mass in
 /// w, its velocities, and the rows of its inverse inertia tensor in world axes.
@@ -302,6 +316,7 @@ inline std::string preamble(const std::string& defines = {}) {
   s += define("DRAPE_FEATURE_MIN_RATE", constants::kFeatureMinRate);
   s += define("DRAPE_PINCH_RATE", constants::kPinchRate);
   s += define("DRAPE_PINCH_OPPOSING_COS", constants::kPinchOpposingCos);
+  s += define("DRAPE_SPACER_GAP", constants::kSpacerGap);
   s += define("DRAPE_SPLIT_GRAM_MIN", constants::kSplitGramMin);
   s += define("DRAPE_LINE_MIN_ALONG", constants::kLineMinAlong);
   s += define("DRAPE_ENERGY_MIN_DISPLACEMENT2", constants::kEnergyMinDisplacement2);
@@ -309,6 +324,7 @@ inline std::string preamble(const std::string& defines = {}) {
   s += define("DRAPE_B_V_PRE", kVPre);
   s += define("DRAPE_B_LINES", kLines);
   s += define("DRAPE_B_PUSHES", kPushes);
+  s += define("DRAPE_B_SPACERS", kSpacers);
   s += define("DRAPE_B_BODIES", kBodies);
   s += define("DRAPE_B_BODY_SUMS", kBodySums);
   s += define("DRAPE_B_SHARES", kShares);
@@ -331,6 +347,7 @@ inline std::string preamble(const std::string& defines = {}) {
   s += "struct PinSlot { vec3 target; uint vertex; };\n";
   s += "struct Lines { vec4 push[DRAPE_CONTACT_SLOTS]; vec4 moment[DRAPE_CONTACT_SLOTS]; };\n";
   s += "struct BodyPush { vec4 force; vec4 torque; int body; int kind; int slot; int pad; };\n";
+  s += "struct SpacerRecord { vec4 onBody; vec4 onOther; vec4 normal; int vertex; int body; int other; int slot; };\n";
   s += "struct Body { vec4 centre; vec4 linear; vec4 angular; vec4 inverseInertia[3]; };\n";
   s += "struct BodySum { dvec4 directForce; dvec4 directTorque; dvec4 exchangeForce; dvec4 exchangeTorque; "
        "dvec4 pinchForce; dvec4 pinchTorque; };\n";

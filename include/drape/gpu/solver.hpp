@@ -351,9 +351,11 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
       respondAndPropagate(h);
     }
     // 5. the cloth's push on the coupled bodies, applied before they move (docs/design.md §6)
-    if (coupled_)
+    if (coupled_) {
       coupling_.gather(bodies_, bodyCentre_, state_.origin, settings_, h, unsigned(vertexCount()), bodyForce_,
-                       bodyTorque_);
+                       bodyTorque_, spacers_);
+      spacersToBodyFrames();
+    }
     fresh_ = false;  // the CPU copy of the state is behind now
   }
 

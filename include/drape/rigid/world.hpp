@@ -30,8 +30,12 @@
 #include <drape/rigid/broadphase.hpp>
 #include <drape/rigid/narrowphase.hpp>
 
+#include <cstdint>
 #include <deque>
+#include <map>
 #include <string>
+#include <tuple>
+#include <utility>
 #include <vector>
 
 namespace drape {
@@ -68,8 +72,8 @@ struct RigidSettings {
 /// ground). The normal points from first to second.
 struct RigidContact {
   struct Point {
-    Eigen::Vector3d localFirst;   ///< contact point on `first`, its body frame (world for the ground)
-    Eigen::Vector3d localSecond;  ///< contact point on `second`, its body frame
+    Eigen::Vector3d localFirst = Eigen::Vector3d::Zero();   ///< on `first`, its body frame (world for the ground)
+    Eigen::Vector3d localSecond = Eigen::Vector3d::Zero();  ///< on `second`, its body frame
     double depth = 0;             ///< m, at detection
     double lambdaNormal = 0;      ///< kg m: normal position multiplier of this substep (lambda / h^2 is a force)
     double normalVelocityBefore = 0;  ///< m/s, relative normal velocity before the solve (> 0 separating)
@@ -84,6 +88,7 @@ struct RigidContact {
   double restitution = 0;
   double lambdaTangent = 0;  ///< kg m: static friction multiplier of the manifold in this substep
   bool sticking = false;     ///< static friction held it in this substep
+  bool spacer = false;       ///< a one-point contact given from outside (RigidWorld::addSpacer)
 };
 
 namespace detail {
@@ -158,6 +163,50 @@ class RigidWorld {
 
   /// Contact manifolds found in the last substep, with the multipliers of its solve.
   const std::vector<RigidContact>& contacts() const { return contacts_; }
+
+  /// Substeps a spacer is kept for after it was last given (addSpacer).
+  static constexpr int kSpacerLife = 10;
+
+  /// Something thin held between body `second` and body `first` (or the fixed world, kGround): a one-point
+  /// contact, solved with the world's own from the next substep on, that keeps the point `onSecond` of `second`
+  /// from coming closer than the point `onFirst` of `first` along `normal` (unit, world, from first to second).
+  /// Points are in their body's own frame (the world's for kGround). Given again under the same `tag` (with the
+  /// same pair) it replaces the last; else it is kept for kSpacerLife substeps while `onSecond` stays within
+  /// `reach` of `onFirst`, and pushes only where the bodies come back into it, as the world's own contacts
+  /// within their margin do. A cloth pinched between a body and the floor passes its pinches this way
+  /// (stepCoupled, the cloth vertex as the tag), so that another body pressing on the first, which only the
+  /// world's solve sees, cannot drive it through the cloth (docs/design.md §6). No friction: the cloth's own
+  /// pinch support carries it. Throws drape::Error, before any change, for a bad index, a `second` that is not
+  /// dynamic, a non-finite point or normal, or a reach that is not positive and finite.
+  void addSpacer(std::int64_t tag, int first, const Eigen::Vector3d& onFirst, int second,
+                 const Eigen::Vector3d& onSecond, const Eigen::Vector3d& normal, double reach) {
+    using detail::require;
+    require(first == kGround || (first >= 0 && first < bodyCount()),
+            [&] { return "addSpacer: first body index " + std::to_string(first) + " out of range"; });
+    require(second >= 0 && second < bodyCount() && second != first,
+            [&] { return "addSpacer: second body index " + std::to_string(second) + " out of range or first"; });
+    require(bodies_[std::size_t(second)].isDynamic(),
+            [&] { return "addSpacer: body " + std::to_string(second) + " is not dynamic"; });
+    require(detail::allFinite(onFirst) && detail::allFinite(onSecond), "addSpacer: points must be finite");
+    require(detail::allFinite(normal) && std::abs(normal.norm() - 1) <= 1e-3, "addSpacer: normal must be unit");
+    require(std::isfinite(reach) && reach > 0,
+            [&] { return "addSpacer: reach must be positive and finite (got " + detail::formatNumber(reach) + ")"; });
+    KeptSpacer& k = spacers_[{first, second, tag}];
+    k.onFirst = onFirst;
+    k.onSecond = onSecond;
+    k.normal = normal.normalized();
+    k.reach = reach;
+    k.age = 0;
+  }
+  /// The spacers held (addSpacer), by first, second and tag; a failed coupled step puts them back.
+  struct KeptSpacer {
+    Eigen::Vector3d onFirst, onSecond, normal;
+    double reach = 0;
+    int age = 0;  ///< substeps since it was last given
+  };
+  using Spacers = std::map<std::tuple<int, int, std::int64_t>, KeptSpacer>;
+  const Spacers& spacers() const { return spacers_; }
+  void restoreSpacers(Spacers spacers) { spacers_ = std::move(spacers); }
 
   /// Total linear momentum of the dynamic bodies (kg m/s).
   Eigen::Vector3d linearMomentum() const {
@@ -270,6 +319,29 @@ class RigidWorld {
                    margin, m))
         continue;
       addContact(i, j, m, a.staticFriction, a.dynamicFriction, a.restitution);
+    }
+    // After the world's own contacts: with one pass, a body pressed by another is then lifted off the spacer
+    // last, and the pair's overlap is the next substep's.
+    for (auto s = spacers_.begin(); s != spacers_.end();) {
+      const int first = std::get<0>(s->first), second = std::get<1>(s->first);
+      KeptSpacer& k = s->second;
+      const Eigen::Vector3d a = toWorld(first, k.onFirst), d = toWorld(second, k.onSecond) - a;
+      const double along = d.dot(k.normal);
+      if (k.age++ >= kSpacerLife || along > k.reach || (d - along * k.normal).norm() > k.reach) {
+        s = spacers_.erase(s);
+        continue;
+      }
+      RigidContact c;
+      c.first = first;
+      c.second = second;
+      c.normal = k.normal;
+      c.count = 1;
+      c.spacer = true;
+      c.points[0].localFirst = k.onFirst;
+      c.points[0].localSecond = k.onSecond;
+      c.points[0].depth = -along;
+      contacts_.push_back(c);
+      ++s;
     }
   }
 
@@ -508,6 +580,7 @@ class RigidWorld {
   std::vector<Eigen::Matrix3d> rotations_;
   std::vector<std::pair<int, int>> pairs_;
   std::vector<RigidContact> contacts_;
+  Spacers spacers_;
   SweepAndPrune broadPhase_;
 };
 
