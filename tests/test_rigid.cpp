@@ -8,6 +8,7 @@
 #include <cmath>
 #include <numbers>
 #include <random>
+#include <string>
 
 // Each test source keeps its helpers in a namespace of its own: the tests build as unity batches.
 namespace rigid_tests {
@@ -28,6 +29,16 @@ Pose at(const Vector3d& p, const Eigen::Quaterniond& q = Eigen::Quaterniond::Ide
 
 Eigen::Quaterniond rot(double angle, const Vector3d& axis) {
   return Eigen::Quaterniond(Eigen::AngleAxisd(angle, axis.normalized()));
+}
+
+/// Whether f throws a drape::Error whose message contains `what`.
+template <class F> bool throwsWith(F f, const std::string& what) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return std::string(e.what()).find(what) != std::string::npos;
+  }
+  return false;
 }
 
 Manifold contactOf(const RigidShape& a, const Pose& pa, const RigidShape& b, const Pose& pb, bool& hit) {
@@ -107,14 +118,6 @@ TEST_CASE("hulls of dense point samples approach the analytic sphere, cylinder a
 }
 
 TEST_CASE("bad shapes, masses, inertias and states are rejected, naming what is wrong", "[rigid]") {
-  auto throwsWith = [](auto f, const std::string& what) {
-    try {
-      f();
-    } catch (const Error& e) {
-      return std::string(e.what()).find(what) != std::string::npos;
-    }
-    return false;
-  };
   CHECK(throwsWith([] { RigidBody b(BodyDesc{Sphere{-1}}); }, "sphere radius"));
   CHECK(throwsWith([] { RigidBody b(BodyDesc{Box{Vector3d(1, 0, 1)}}); }, "box half extents"));
   CHECK(throwsWith([] { RigidBody b(BodyDesc{Capsule{0.1, NAN}}); }, "capsule halfHeight"));
@@ -622,14 +625,6 @@ TEST_CASE("a spacer holds a body pressed by another off the ground, for its life
   far.subStep(0.001);
   CHECK(far.spacers().empty());
 
-  auto throwsWith = [](auto f, const std::string& what) {
-    try {
-      f();
-    } catch (const Error& e) {
-      return std::string(e.what()).find(what) != std::string::npos;
-    }
-    return false;
-  };
   RigidWorld world;
   scene(world);
   BodyDesc kinematic{Box{lowHalf}, at(Vector3d(1, 0, 1))};
