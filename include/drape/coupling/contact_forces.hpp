@@ -170,9 +170,10 @@ template <Scalar S> int pinchingSlot(const ContactBuffer<S>& contacts, Index i, 
   return fixed >= 0 ? fixed : body;
 }
 
-/// Vertex i at x pinched between its slot k (c), a body's, and slot o's surface, as a spacer with its points in the cloth's
-/// local frame (SolverFront::spacersToBodyFrames moves them). Each slot's plane lies a thickness t out of its
-/// surface (`offset`: where the vertex was placed along the normal); `onOther` lies kSpacerGap thicknesses out.
+/// Vertex i at x pinched between its slot k (c), a body's, and slot o's surface, as a spacer with its points in
+/// the cloth's local frame (SolverFront::spacersToBodyFrames moves them). Each slot's plane lies a thickness t out
+/// of its surface (`offset`: where the vertex was placed along the normal); `onOther` lies kSpacerGap thicknesses
+/// out.
 template <Scalar S>
 Spacer spacerOf(Index i, int k, const Vec3<S>& x, S t, const ContactSlot<S>& c, const ContactSlot<S>& o) {
   Spacer p;

@@ -70,8 +70,9 @@ template <class ClothSolver> void passSpacers(const ClothSolver& cloth, RigidWor
   for (const Spacer& p : cloth.spacers()) {
     const int body = index[std::size_t(p.body)];
     const int other = p.other < 0 ? RigidWorld::kGround : index[std::size_t(p.other)];
+    const std::int64_t tag = std::int64_t(p.vertex) * constants::kContactSlots + p.slot;
     if (body >= 0 && (p.other < 0 || other >= 0))
-      world.addSpacer(std::int64_t(p.vertex) * constants::kContactSlots + p.slot, other, p.onOther, body, p.onBody, p.normal, reach);
+      world.addSpacer(tag, other, p.onOther, body, p.onBody, p.normal, reach);
   }
 }
 
