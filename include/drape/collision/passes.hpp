@@ -205,7 +205,12 @@ template <Scalar S> class ContactPasses {
   void projectSolid(const Solid& solid, const PassInputs<S>& in, S slack, Index n, S reach, Index place) {
     Vec3<S>* x = in.x;
     const S thickness = in.thickness;
-    constexpr bool kFacePass = kFaces && !std::decay_t<decltype(solid.sdf)>::kLinear;
+    using Field = std::decay_t<decltype(solid.sdf)>;
+    constexpr bool kFacePass = kFaces && !Field::kLinear;
+    // A ball's face search is exact (its closed form): a vertex within the thickness is a corner of faces whose
+    // nearest points are as deep, which the face pass answers, so its vertex pass would only repeat that work
+    // (docs/design.md §3, "Speed"). Kept where paths are swept: the vertex pass sweeps each vertex's own path.
+    constexpr bool kVertexPass = !(kFacePass && !kSweep && requires { Field::kPointCore; });
     if (useBins_ && solid.bounded) {
       DRAPE_OMP(single)
       {
@@ -217,8 +222,9 @@ template <Scalar S> class ContactPasses {
         kept_ = kFacePass && kCull && whole_ && !kSweep ? clearancesFor(solid, place, in) : nullptr;
       }
       const std::vector<Index>& near = whole_ ? every_ : nearVertices_;
-      projectVertices<kSweep>(solid, in, ItemList{near.data()}, whole_ ? n : Index(nearVertices_.size()),
-                              bins_.binned(), slack);
+      if constexpr (kVertexPass)
+        projectVertices<kSweep>(solid, in, ItemList{near.data()}, whole_ ? n : Index(nearVertices_.size()),
+                                bins_.binned(), slack);
       DRAPE_OMP(single)
       {
         bins_.noteDrift(moveBound_);
@@ -245,7 +251,7 @@ template <Scalar S> class ContactPasses {
     } else {
       // Without the bins, the binned positions are the positions: nothing drifts.
       const Vec3<S>* binned = useBins_ ? bins_.binned() : x;
-      projectVertices<kSweep>(solid, in, AllItems{}, n, binned, slack);
+      if constexpr (kVertexPass) projectVertices<kSweep>(solid, in, AllItems{}, n, binned, slack);
       if constexpr (kFacePass) {
         const S moved = projectFaces<kCull, false, kSweep>(solid, in, AllItems{}, Index(in.triangles.size()), n,
                                                            binned, place, KeptClearance<S>{});
