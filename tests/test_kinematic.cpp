@@ -184,7 +184,7 @@ TEMPLATE_TEST_CASE("with the angular momentum kept, a cloth pinned on a friction
   // contact's corners answered along the face's normal, and propagation's shares given along their sources'
   // mean normal at the vertex they move. Measured after 5 s at 10 substeps with the moment kept
   // (bench/spin_drift 5 10): at most 3.5e-3 rad/s for every method, the sphere at rest or spinning, float and
-  // double, against 0.18-0.34 without.
+  // double; without it this scene turns 0.08-0.16 rad/s with faces and 0.26-0.32 with vertex contacts.
   using S = TestType;
   using M = drape::CollisionMethod;
   const double seconds = 5, bound = 1e-2;
@@ -202,12 +202,12 @@ TEMPLATE_TEST_CASE("with the angular momentum kept, a cloth pinned on a friction
     INFO(drape::toString(c.method) << ", sphere spinning at " << c.spin << " rad/s: turn " << turn << " rad/s");
     CHECK(std::abs(turn) <= bound);
   }
-  // The scene turns the cloth where the moment is not kept: the meter above sees what it claims to.
-  for (const M method : drape::test::kSanitized ? std::vector<M>{M::Faces} : std::vector<M>{M::Faces, M::Vertices}) {
-    const double baseline = drapeTurn<S>(method, false, 0.0, seconds);
-    INFO(drape::toString(method) << " without: turn " << baseline << " rad/s");
-    CHECK(std::abs(baseline) >= 10 * bound);
-  }
+  // The scene turns the cloth where the moment is not kept: the meter above sees what it claims to. Shown on the
+  // vertex method, which turns most (0.26-0.32 rad/s); the faces method's own turn without the setting (0.08-0.16,
+  // smaller since a ball's vertex pass was left to its face pass) is the defect the setting answers, not asserted.
+  const double baseline = drapeTurn<S>(M::Vertices, false, 0.0, seconds);
+  INFO("vertices without: turn " << baseline << " rad/s");
+  CHECK(std::abs(baseline) >= 10 * bound);
 }
 
 TEMPLATE_TEST_CASE("with the angular momentum kept, the cloth on a frictionless sphere stays unturned at 2 "
