@@ -207,10 +207,9 @@ template <Scalar S> class ContactPasses {
     const S thickness = in.thickness;
     using Field = std::decay_t<decltype(solid.sdf)>;
     constexpr bool kFacePass = kFaces && !Field::kLinear;
-    // A ball's face search is exact (its closed form): a vertex within the thickness is a corner of faces whose
-    // nearest points are as deep, which the face pass answers, so its vertex pass would only repeat that work
-    // (docs/design.md §3, "Speed"). Kept where paths are swept: the vertex pass sweeps each vertex's own path.
-    constexpr bool kVertexPass = !(kFacePass && !kSweep && requires { Field::kPointCore; });
+    // Where the face pass answers every vertex within the thickness (a ball's), the vertex pass would only repeat
+    // that work. Kept where paths are swept: the vertex pass sweeps each vertex's own path.
+    constexpr bool kVertexPass = !(kFacePass && !kSweep && kFacesAnswerVertices<Field>);
     if (useBins_ && solid.bounded) {
       DRAPE_OMP(single)
       {

@@ -25,6 +25,7 @@ struct SolidPass {
   PackedShape field;
   SolidMotion<float> motion;
   bool curved;  ///< has a face pass (a field that is not linear)
+  bool facesAnswerVertices;  ///< its face pass answers every vertex within the thickness (kFacesAnswerVertices)
   float repulsionRadius;
   Falloff falloff;
   const Buffer<layout::Vertex>* data;  ///< a mesh's grid nodes or a hull's faces and edges, else null
@@ -110,7 +111,8 @@ class SolidKernels {
   /// Solid `compiled` as this substep's kernels see it (its field packed by packShape).
   template <class Shape> SolidPass pass(const CompiledSolid<Shape, float>& compiled) const {
     SolidPass p{shapeCode<Shape>(), packShape(compiled.sdf), compiled.motion, !Sdf<Shape, float>::kLinear,
-                compiled.repulsionRadius, compiled.falloff, shapeData(shapeDataKey(compiled)),
+                kFacesAnswerVertices<Sdf<Shape, float>>, compiled.repulsionRadius, compiled.falloff,
+                shapeData(shapeDataKey(compiled)),
                 Vec3<float>::Constant(-std::numeric_limits<float>::max()),
                 Vec3<float>::Constant(std::numeric_limits<float>::max())};
     if (compiled.bounded) p.boxLow = compiled.boxLow, p.boxHigh = compiled.boxHigh;

@@ -289,9 +289,9 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
       // Continuous contact sweeps bounded solids only (a half-space has no far side), as on the CPU.
       const Eigen::Vector2f sweep =
           sweep_ && h > 0.0f && passes_[k].curved ? Eigen::Vector2f(h, gate * gate) : Eigen::Vector2f::Zero();
-      // A ball's face pass answers every vertex within the thickness (ContactPasses::projectSolid's kVertexPass):
-      // its vertex pass, where it is the substep's first, only starts the records (a slack past any depth).
-      if (!(faces && passes_[k].code == layout::kSphere && sweep.y() <= 0.0f))
+      // Where the face pass answers every vertex within the thickness (a ball's; ContactPasses::projectSolid's
+      // kVertexPass), the vertex pass, if it is the substep's first, only starts the records (a slack past any depth).
+      if (!(faces && passes_[k].facesAnswerVertices && sweep.y() <= 0.0f))
         kernels_.vertexPass(passes_[k], thickness, n, k == 0, -1, 0.0f, sweep);
       else if (k == 0)
         kernels_.vertexPass(passes_[k], thickness, n, true, -1, std::numeric_limits<float>::infinity(), sweep);

@@ -23,6 +23,11 @@ template <class Shape, Scalar S> inline constexpr bool kSmoothField = requires {
 /// DRAPE_HOLDS_DEEPEST_POINTS (gpu/shapes.hpp).
 template <class Field>
 inline constexpr bool kHoldsDeepestPoints = !requires { Field::kPointCore; } && !requires { Field::kSegmentCore; };
+/// Whether a field's face pass answers every vertex within the thickness, so that its vertex pass can be left out
+/// where no path is swept: a ball's, whose closed form finds each face's nearest point exactly, so a vertex within
+/// the thickness is a corner of faces whose nearest points are at least as deep (docs/design.md §3, "Speed"). Read
+/// by the CPU's passes (ContactPasses::projectSolid) and, per solid, by the GPU's (SolidPass::facesAnswerVertices).
+template <class Field> inline constexpr bool kFacesAnswerVertices = requires { Field::kPointCore; };
 
 
 /// Whether a point at squared distance `squared` from a field's core (a ball's centre, a capsule's segment) lies
