@@ -5,7 +5,8 @@
 // meshDrop: a cloth dropped on meshed solids (grid fields), landing included.
 // ballDrop: a cloth dropped on a ball, landing included, with and without continuous contact.
 // ballScene: a cloth settled on a ball and the floor, the face method against vertex contacts, at two sizes on
-// one and two threads. capsuleScene: the same over a capsule lying on the floor.
+// one and two threads, and with the smaller one's footprint meshed finer on one. capsuleScene: the same over a
+// capsule lying on the floor.
 // undoableStep: the slope (faces, 10 substeps) stepped with an observer that may throw, so each step keeps its
 // start to be undone, against a noexcept one.
 // keptSpin: the slope and the ball scene without and with Settings::keepAngularMomentum.
@@ -147,7 +148,9 @@ void ballDrop(benchmark::State& state) {
 /// substeps, area density 0.1 kg/m^2), timed after 2 s of settling, step after step: the first scene most users
 /// try, with the default face method (method 0) against vertex contacts only (method 1). Side 256: a 256 x 256
 /// cloth of 5 mm spacing over the same ball, nearly the same area, for the cost per vertex as the cloth grows.
-drape::Solver<float> settledOnBall(const drape::Settings& settings, bool large, bool capsule = false) {
+/// Sides 100 and 200: the 50 x 80 cloth's own footprint meshed finer, 100 x 160 of 1 cm and 200 x 320 of 5 mm, so
+/// that the share of faces on the ball stays as it is while the vertices grow.
+drape::Solver<float> settledOnBall(const drape::Settings& settings, int side, bool capsule = false) {
   drape::Solid<drape::Sphere> ball;
   ball.shape.radius = 0.3;
   ball.pose.position = {0, 0, 0.3};
@@ -162,9 +165,10 @@ drape::Solver<float> settledOnBall(const drape::Settings& settings, bool large, 
   drape::Solid<drape::Plane> floor;
   floor.staticFriction = floor.dynamicFriction = 0.3;
   drape::SheetDesc sheet;
-  sheet.nx = large ? 256 : 50;
-  sheet.ny = large ? 256 : 80;
-  sheet.spacing = large ? 0.005 : 0.02;
+  const bool square = side == 256;
+  sheet.nx = side;
+  sheet.ny = square ? side : side * 8 / 5;
+  sheet.spacing = square ? 0.005 : 1.0 / side;
   sheet.placement.position = {0.01, -0.02, 0.65};
   const auto asset = std::make_shared<const drape::ClothAsset<float>>(drape::ClothAsset<float>::sheet(sheet));
   drape::Solver<float> solver(asset, settings, 0.1);
@@ -181,7 +185,7 @@ void curvedScene(benchmark::State& state, bool capsule) {
   drape::Settings settings;
   settings.collisionMethod = state.range(0) == 0 ? drape::CollisionMethod::Faces : drape::CollisionMethod::Vertices;
   settings.threadCount = int(state.range(2));
-  drape::Solver<float> solver = settledOnBall(settings, state.range(1) == 256, capsule);
+  drape::Solver<float> solver = settledOnBall(settings, int(state.range(1)), capsule);
   long long faceContacts = 0, vertexContacts = 0, facesTested = 0, facesCulled = 0, keptClear = 0, steps = 0;
   for (auto _ : state) {
     solver.step(1.0 / 60, [&](const auto& s) {
@@ -231,7 +235,7 @@ void keptSpin(benchmark::State& state) {
     for (int f = 0; f < 90; ++f) solver.step(c.dt);
     run(solver, c.dt, c.subSteps);
   } else {
-    drape::Solver<float> solver = settledOnBall(settings, false);
+    drape::Solver<float> solver = settledOnBall(settings, 50);
     run(solver, 1.0 / 60, settings.subStepCount);
   }
 }
@@ -280,6 +284,13 @@ BENCHMARK(ballDrop)
 BENCHMARK(ballScene)
     ->ArgNames({"method", "side", "threads"})
     ->ArgsProduct({{0, 1}, {50, 256}, {1, 2}})
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
+// The 50 x 80 cloth's footprint meshed finer, on one thread: the cost per vertex as the mesh grows, the contacts'
+// share unchanged.
+BENCHMARK(ballScene)
+    ->ArgNames({"method", "side", "threads"})
+    ->ArgsProduct({{0, 1}, {100, 200}, {1}})
     ->UseRealTime()
     ->Unit(benchmark::kMillisecond);
 
