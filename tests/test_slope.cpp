@@ -258,7 +258,8 @@ TEMPLATE_TEST_CASE("at 2 substeps a cloth hanging over a ball comes to rest from
       if (f == 10 * 60) early = drape::scenes::rmsSpeed(solver);
     }
     const double late = drape::scenes::rmsSpeed(solver);
-    std::printf("[rest] ball, start %d, 2 substeps, 1 iteration (%s): RMS speed after 10 s %.2e m/s, after 40 s %.2e m/s\n",
+    std::printf("[rest] ball, start %d, 2 substeps, 1 iteration (%s): RMS speed after 10 s %.2e m/s, after 40 s "
+                "%.2e m/s\n",
                 placement, sizeof(TestType) == 4 ? "float" : "double", early, late);
     INFO("start " << placement << ": RMS speed of all vertices after 10 s " << early << " m/s, after 40 s " << late);
     CHECK(early > 1e-4);  // the meter sees the skirt's swing
