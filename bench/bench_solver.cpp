@@ -148,8 +148,8 @@ void ballDrop(benchmark::State& state) {
 /// substeps, area density 0.1 kg/m^2), timed after 2 s of settling, step after step: the first scene most users
 /// try, with the default face method (method 0) against vertex contacts only (method 1). Side 256: a 256 x 256
 /// cloth of 5 mm spacing over the same ball, nearly the same area, for the cost per vertex as the cloth grows.
-/// Sides 100 and 200: the 50 x 80 cloth's own footprint meshed finer, 100 x 160 of 1 cm and 200 x 320 of 5 mm, so
-/// that the share of faces on the ball stays as it is while the vertices grow.
+/// Sides 100 and 200: the 50 x 80 cloth's own footprint meshed finer, 100 x 160 of 1 cm and 200 x 320 of 5 mm (a
+/// finer cloth lies closer along the ball, so the share of its faces in contact grows: docs/benchmarks.md).
 drape::Solver<float> settledOnBall(const drape::Settings& settings, int side, bool capsule = false) {
   drape::Solid<drape::Sphere> ball;
   ball.shape.radius = 0.3;
@@ -286,8 +286,7 @@ BENCHMARK(ballScene)
     ->ArgsProduct({{0, 1}, {50, 256}, {1, 2}})
     ->UseRealTime()
     ->Unit(benchmark::kMillisecond);
-// The 50 x 80 cloth's footprint meshed finer, on one thread: the cost per vertex as the mesh grows, the contacts'
-// share unchanged.
+// The 50 x 80 cloth's footprint meshed finer, on one thread: the cost per vertex as one footprint's mesh grows.
 BENCHMARK(ballScene)
     ->ArgNames({"method", "side", "threads"})
     ->ArgsProduct({{0, 1}, {100, 200}, {1}})
