@@ -12,6 +12,11 @@
 // (1 cm) each way in x and y: whether a cloth comes to rest can hang on where its vertices meet the solid's edges.
 // The largest strain of the cloth's stretch edges at the end is read beside the speeds: at few substeps the
 // constraint passes leave a hanging cloth stretched, most where it hangs from the solid.
+// The speeds are read at a frame's end, which a cycle of the substeps can hide or inflate: a vertex that moves
+// and comes back within a frame reads a speed where an application sees it still, and one whose cycle spans
+// frames may read 0 at each. So the positions are read too, at every frame's end over the run's last second:
+// the largest distance any vertex spans there (the diagonal of the box its positions fill) is what a viewer sees
+// move, and a cloth at rest spans nothing.
 // Run: build/bench/rest_drift [--iterations N, default 1] [--air-damping C in 1/s, default 0] [--placements P,
 //      default 1] [--rings R, Settings::propagationRings, default 1] [--weight W, Settings::propagationWeight,
 //      default 0.5] [--scenes ridge,corner,rod,ball]
@@ -44,6 +49,7 @@ struct Reading {
   double nearRms = 0;
   double lowest = 0;
   double strain = 0;      ///< the largest strain of the stretch edges at the end
+  double span = 0;        ///< the largest distance a vertex spans at the frames' ends over the last second (m)
   double msPerFrame = 0;  ///< the whole run's stepping time over its frames, landing included
 };
 
@@ -63,6 +69,8 @@ Reading run(RestScene scene, CollisionMethod method, int substeps, int iteration
   solver.setSettings(settings);
   const int frames = int(seconds * 60 + 0.5);
   const int marks[3] = {frames / 4, frames / 2, frames};
+  const int watched = std::min(frames, 60);  // the last second's frames
+  std::vector<Eigen::Vector3d> low(std::size_t(solver.vertexCount())), high(low.size());
   Reading r;
   double stepping = 0;
   for (int f = 1; f <= frames; ++f) {
@@ -71,7 +79,15 @@ Reading run(RestScene scene, CollisionMethod method, int substeps, int iteration
     stepping += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     for (int k = 0; k < 3; ++k)
       if (f == marks[k]) r.rms[k] = scenes::rmsSpeed(solver);
+    if (f > frames - watched)
+      for (Index i = 0; i < solver.vertexCount(); ++i) {
+        const Eigen::Vector3d p = solver.position(i);
+        const std::size_t k = std::size_t(i);
+        low[k] = f == frames - watched + 1 ? p : Eigen::Vector3d(low[k].cwiseMin(p));
+        high[k] = f == frames - watched + 1 ? p : Eigen::Vector3d(high[k].cwiseMax(p));
+      }
   }
+  for (std::size_t k = 0; k < low.size(); ++k) r.span = std::max(r.span, (high[k] - low[k]).norm());
   r.msPerFrame = stepping / frames;
   r.nearRms = scenes::rmsSpeedNear(solver, distance, kNear);
   r.strain = stretchStrain(solver.asset(), solver.state().x).max;
@@ -171,25 +187,26 @@ int main(int argc, char** argv) {
         "%d solver iteration(s) per substep, air damping %g/s, %d propagation ring(s) of weight %g, %d placements of "
         "the cloth. After %g s: how "
         "many are at rest (RMS speed of all vertices at most %g m/s), the median and the worst RMS speed "
-        "(m/s), the median within 2 cm of the solid, the median and the worst largest strain, and the median "
+        "(m/s), the median within 2 cm of the solid, the median and the worst largest strain, the median and the "
+        "worst largest distance a vertex spans at the frames' ends over the last second (mm), and the median "
         "time per frame (ms, landing included).\n\n",
         iterations, airDamping, rings, weight, placements, seconds, kAtRest);
     std::printf(
         "| scene | substeps | method | scalar | at rest | median | worst | median within 2 cm | strain | "
-        "ms per frame |\n");
-    std::printf("|---|---:|---|---|---:|---:|---:|---:|---:|---:|\n");
+        "span (mm) | ms per frame |\n");
+    std::printf("|---|---:|---|---|---:|---:|---:|---:|---:|---:|---:|\n");
   } else {
     std::printf(
         "%d solver iteration(s) per substep, air damping %g/s, %d propagation ring(s) of weight %g. RMS speed of all "
         "vertices (m/s) after %g, %g "
-        "and %g s; at the end the lowest vertex (m) and the largest strain; the time per frame (ms, landing "
-        "included).\n\n",
+        "and %g s; at the end the lowest vertex (m) and the largest strain; the largest distance a vertex spans at "
+        "the frames' ends over the last second (mm); the time per frame (ms, landing included).\n\n",
         iterations, airDamping, rings, weight, seconds / 4, seconds / 2, seconds);
     std::printf(
         "| scene | substeps | method | scalar | RMS at %g s | at %g s | at %g s | within 2 cm at %g s | lowest | "
-        "strain | ms per frame |\n",
+        "strain | span (mm) | ms per frame |\n",
         seconds / 4, seconds / 2, seconds, seconds);
-    std::printf("|---|---:|---|---|---:|---:|---:|---:|---:|---:|---:|\n");
+    std::printf("|---|---:|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n");
   }
   auto median = [](std::vector<double> v) {
     std::sort(v.begin(), v.end());
@@ -205,18 +222,19 @@ int main(int argc, char** argv) {
                                        : run<double>(scene, m, n, iterations, airDamping, rings, weight, seconds, k));
           std::printf("| %s | %d | %s | %s |", scenes::name(scene), n, toString(m), isFloat ? "float" : "double");
           if (placements > 1) {
-            std::vector<double> all, near, strains, times;
+            std::vector<double> all, near, strains, spans, times;
             for (const Reading& r : readings)
               all.push_back(r.rms[2]), near.push_back(r.nearRms), strains.push_back(r.strain),
-                  times.push_back(r.msPerFrame);
+                  spans.push_back(r.span * 1e3), times.push_back(r.msPerFrame);
             const auto resting = std::count_if(all.begin(), all.end(), [](double v) { return v <= kAtRest; });
-            std::printf(" %d of %d | %.1e | %.1e | %.1e | %.2f, %.2f | %.2f |\n", int(resting), placements,
-                        median(all), *std::max_element(all.begin(), all.end()), median(near), median(strains),
-                        *std::max_element(strains.begin(), strains.end()), median(times));
+            std::printf(" %d of %d | %.1e | %.1e | %.1e | %.2f, %.2f | %.1e, %.1e | %.2f |\n", int(resting),
+                        placements, median(all), *std::max_element(all.begin(), all.end()), median(near),
+                        median(strains), *std::max_element(strains.begin(), strains.end()), median(spans),
+                        *std::max_element(spans.begin(), spans.end()), median(times));
           } else {
             const Reading& r = readings[0];
-            std::printf(" %.1e | %.1e | %.1e | %.1e | %.3f | %.2f | %.2f |\n", r.rms[0], r.rms[1], r.rms[2],
-                        r.nearRms, r.lowest, r.strain, r.msPerFrame);
+            std::printf(" %.1e | %.1e | %.1e | %.1e | %.3f | %.2f | %.1e | %.2f |\n", r.rms[0], r.rms[1], r.rms[2],
+                        r.nearRms, r.lowest, r.strain, r.span * 1e3, r.msPerFrame);
           }
           std::fflush(stdout);
         }
