@@ -14,9 +14,9 @@
 // constraint passes leave a hanging cloth stretched, most where it hangs from the solid.
 // The speeds are read at a frame's end, which a cycle of the substeps can hide or inflate: a vertex that moves
 // and comes back within a frame reads a speed where an application sees it still, and one whose cycle spans
-// frames may read 0 at each. So the positions are read too, at every frame's end over the run's last second:
-// the largest distance any vertex spans there (the diagonal of the box its positions fill) is what a viewer sees
-// move, and a cloth at rest spans nothing.
+// frames may read little at the moment it is read. So the positions are read too, at every frame's end over the
+// run's last second: the largest distance any vertex spans there (scenes::FrameSpan) is what a viewer sees move,
+// and a cloth at rest spans nothing.
 // Run: build/bench/rest_drift [--iterations N, default 1] [--air-damping C in 1/s, default 0] [--placements P,
 //      default 1] [--rings R, Settings::propagationRings, default 1] [--weight W, Settings::propagationWeight,
 //      default 0.5] [--scenes ridge,corner,rod,ball]
@@ -70,7 +70,7 @@ Reading run(RestScene scene, CollisionMethod method, int substeps, int iteration
   const int frames = int(seconds * 60 + 0.5);
   const int marks[3] = {frames / 4, frames / 2, frames};
   const int watched = std::min(frames, 60);  // the last second's frames
-  std::vector<Eigen::Vector3d> low(std::size_t(solver.vertexCount())), high(low.size());
+  scenes::FrameSpan span;
   Reading r;
   double stepping = 0;
   for (int f = 1; f <= frames; ++f) {
@@ -79,15 +79,9 @@ Reading run(RestScene scene, CollisionMethod method, int substeps, int iteration
     stepping += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     for (int k = 0; k < 3; ++k)
       if (f == marks[k]) r.rms[k] = scenes::rmsSpeed(solver);
-    if (f > frames - watched)
-      for (Index i = 0; i < solver.vertexCount(); ++i) {
-        const Eigen::Vector3d p = solver.position(i);
-        const std::size_t k = std::size_t(i);
-        low[k] = f == frames - watched + 1 ? p : Eigen::Vector3d(low[k].cwiseMin(p));
-        high[k] = f == frames - watched + 1 ? p : Eigen::Vector3d(high[k].cwiseMax(p));
-      }
+    if (f > frames - watched) span.add(solver);
   }
-  for (std::size_t k = 0; k < low.size(); ++k) r.span = std::max(r.span, (high[k] - low[k]).norm());
+  r.span = span.largest();
   r.msPerFrame = stepping / frames;
   r.nearRms = scenes::rmsSpeedNear(solver, distance, kNear);
   r.strain = stretchStrain(solver.asset(), solver.state().x).max;

@@ -8,10 +8,12 @@
 
 #include <slope.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <memory>
 #include <numbers>
+#include <vector>
 
 namespace drape::scenes {
 
@@ -49,6 +51,39 @@ template <class S> double rmsSpeedNear(const Solver<S>& solver, const Distance& 
 template <class S> double rmsSpeed(const Solver<S>& solver) {
   return rmsSpeedNear(solver, [](const Eigen::Vector3d&) { return 0.0; }, 0.0);
 }
+
+/// The largest distance a vertex spans at the frames' ends over a window of frames (the diagonal of the box its
+/// positions fill): what a viewer sees move. A speed read at a frame's end reads a cycle of the substeps that
+/// returns within the frame, and can catch a cycle that spans frames at a still moment; a span sees the second
+/// and not the first.
+class FrameSpan {
+ public:
+  /// Adds the positions at a frame's end; the first call (after clear) opens the window.
+  template <class S> void add(const Solver<S>& solver) {
+    const bool first = low_.empty();
+    low_.resize(std::size_t(solver.vertexCount()));
+    high_.resize(low_.size());
+    for (Index i = 0; i < solver.vertexCount(); ++i) {
+      const Eigen::Vector3d p = solver.position(i);
+      const std::size_t k = std::size_t(i);
+      low_[k] = first ? p : Eigen::Vector3d(low_[k].cwiseMin(p));
+      high_[k] = first ? p : Eigen::Vector3d(high_[k].cwiseMax(p));
+    }
+  }
+  void clear() {
+    low_.clear();
+    high_.clear();
+  }
+  /// The largest span over the window so far (m).
+  double largest() const {
+    double most = 0;
+    for (std::size_t k = 0; k < low_.size(); ++k) most = std::max(most, (high_[k] - low_[k]).norm());
+    return most;
+  }
+
+ private:
+  std::vector<Eigen::Vector3d> low_, high_;
+};
 
 /// The solid's distance field, in double, at the world origin.
 template <class Shape> Distance fieldOf(const Solid<Shape>& solid) {
