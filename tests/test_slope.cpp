@@ -298,7 +298,7 @@ TEMPLATE_TEST_CASE("at 2 substeps and 4 solver iterations a cloth on a ridge com
   // (featureAlignedPush, docs/design.md §3): after 20 s every vertex is at 5.9e-7 (float) / 6.6e-14 (double) m/s
   // RMS. Pushed across the face's edge alone, 1.0e-5 / 1.2e-5; along the field's gradient, 4.0e-2; with the
   // feature push and 1 pass, 9.3e-3. The in-solve method, whose contacts are in every pass, rests here too
-  // (3.4e-6 / 6.8e-15). This is the scene's own start: moved by up to half a cell, 4 of 8 starts rest with 4 passes
+  // (3.4e-6 / 6.8e-15). This is the scene's own start: moved by up to half a cell, 5 of 8 starts rest with 4 passes
   // and all 8 with 16 and no propagation ring (`build/bench/rest_drift --placements 8 --iterations N [--rings 0] 20
   // 2`, docs/design.md, Known limits).
   // Over its last second no vertex spans more than 1.6e-7 m (float) at the frames' ends.
