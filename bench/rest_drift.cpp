@@ -55,9 +55,7 @@ struct Reading {
 
 /// At most this RMS speed of all vertices (m/s), a cloth is at rest (the target of the rest tests).
 constexpr double kAtRest = 1e-4;
-/// And still where a viewer sees it: no vertex spans more than this over the last second (m), the same speed kept
-/// for a second by one vertex (the rest tests' second bound).
-constexpr double kStillSpan = 1e-4;
+using scenes::kStillSpan;  // and still where a viewer sees it: the rest tests' second bound
 
 template <class S>
 Reading run(RestScene scene, CollisionMethod method, int substeps, int iterations, double airDamping, int rings,

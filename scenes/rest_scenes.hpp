@@ -52,6 +52,10 @@ template <class S> double rmsSpeed(const Solver<S>& solver) {
   return rmsSpeedNear(solver, [](const Eigen::Vector3d&) { return 0.0; }, 0.0);
 }
 
+/// At most this span over a second at the frames' ends (m), a cloth is still where a viewer sees it: the rest
+/// tests' speed bound, 1e-4 m/s, kept for a second by one vertex (FrameSpan).
+inline constexpr double kStillSpan = 1e-4;
+
 /// The largest distance a vertex spans at the frames' ends over a window of frames (the diagonal of the box its
 /// positions fill): what a viewer sees move. A speed read at a frame's end reads a cycle of the substeps that
 /// returns within the frame, and can catch a cycle that spans frames at a still moment; a span sees the second

@@ -214,10 +214,6 @@ TEMPLATE_TEST_CASE("a cloth started partly inside the slope: faces settles, in-s
   CHECK(inSolve.tremblingRms >= 100 * faces.tremblingRms);
 }
 
-/// At most this span of any vertex over a second at the frames' ends (m), a cloth is still where a viewer sees it:
-/// the speed bound of the rest tests, 1e-4 m/s, kept for a second by one vertex (scenes::FrameSpan).
-constexpr double kStillSpan = 1e-4;
-
 /// A rest scene (scenes/rest_scenes.hpp) at 2 substeps and `iterations` solver passes, after `seconds`: the RMS
 /// speed of all vertices with the faces method and with the in-solve one, and the faces run's largest span over
 /// its last second; printed as a [rest] line. With `airDamping` (1/s) above 0, the first run has it and the
@@ -286,9 +282,9 @@ TEMPLATE_TEST_CASE("at 2 substeps a cloth hanging over a ball comes to rest from
     INFO("start " << placement << ": RMS speed of all vertices after 10 s " << early << " m/s, after 40 s " << late
                   << "; span over the tenth second " << earlySpan << " m, over the fortieth " << lateSpan << " m");
     CHECK(early > 1e-4);  // the meters see the skirt's swing
-    CHECK(earlySpan > kStillSpan);
+    CHECK(earlySpan > drape::scenes::kStillSpan);
     CHECK(late <= 1e-4);
-    CHECK(lateSpan <= kStillSpan);
+    CHECK(lateSpan <= drape::scenes::kStillSpan);
   }
 }
 
@@ -307,7 +303,7 @@ TEMPLATE_TEST_CASE("at 2 substeps and 4 solver iterations a cloth on a ridge com
   INFO("RMS speed of all vertices after 20 s: faces " << run.rms[0] << " m/s, in-solve " << run.rms[1]
                                                       << " m/s; span over the last second " << run.span << " m");
   CHECK(run.rms[0] <= 1e-4);
-  CHECK(run.span <= kStillSpan);
+  CHECK(run.span <= drape::scenes::kStillSpan);
 }
 
 TEMPLATE_TEST_CASE("at 2 substeps, 16 solver iterations and no propagation ring a cloth on a cube's corner comes to "
@@ -327,7 +323,7 @@ TEMPLATE_TEST_CASE("at 2 substeps, 16 solver iterations and no propagation ring 
   INFO("RMS speed of all vertices after 20 s: faces " << run.rms[0] << " m/s, in-solve " << run.rms[1]
                                                       << " m/s; span over the last second " << run.span << " m");
   CHECK(run.rms[0] <= 1e-4);
-  CHECK(run.span <= kStillSpan);
+  CHECK(run.span <= drape::scenes::kStillSpan);
 }
 
 TEMPLATE_TEST_CASE("air damping: a falling cloth's speed follows v0 exp(-c t) + g (1 - exp(-c t)) / c",
