@@ -13,6 +13,9 @@ seeds=("$@")
 sample="$build/samples/rigid_rain"
 [ -x "$sample" ] || { echo "rain_trade.sh: $sample not found (build the samples first)" >&2; exit 2; }
 command -v jq > /dev/null || { echo "rain_trade.sh: jq not found (apt-get install jq)" >&2; exit 2; }
+# Each run's JSON goes to a file and is read after the run: a reader beside a timed run slows it.
+json=$(mktemp)
+trap 'rm -f "$json"' EXIT
 
 # The median and the largest of the numbers on standard input, one per line.
 stats() { sort -g | awk '{ v[NR] = $1 } END { m = NR % 2 ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2;
@@ -23,8 +26,9 @@ echo "|---|---|---|---|---|---|"
 for series in "10 faces" "10 vertices" "5 faces" "2 faces" "1 faces" "2 vertices" "1 vertices"; do
   set -- $series
   out=$(for seed in "${seeds[@]}"; do
-    "$sample" --bodies 80 --seed "$seed" --substeps "$1" --method "$2" --steps 200 --json 2> /dev/null |
-      jq -r '[.ms_per_step, .bodies_through_cloth_at_release, .max_penetration * 1000, .final_max_strain] | @tsv'
+    "$sample" --bodies 80 --seed "$seed" --substeps "$1" --method "$2" --steps 200 --json 2> /dev/null > "$json"
+    jq -r '[.ms_per_step, .bodies_through_cloth_at_release, .max_penetration * 1000, .final_max_strain] | @tsv' \
+      "$json"
   done)
   col() { cut -f "$1" <<< "$out" | stats; }
   contacts=$([ "$2" = vertices ] && echo "vertex only" || echo "vertex and face")
