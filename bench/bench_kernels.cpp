@@ -1,11 +1,12 @@
 // Kernel micro-benchmarks, ns per item (items/s inverted): one distance-constraint set per type and SIMD level,
 // the prediction and the velocity update, the cull of a far face, the deepest-point search per shape, the
-// contact response and propagation.
+// contact response and propagation, and the broad phase's rebuild.
 // Run: build/bench/bench_kernels --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 #include <drape/drape.hpp>
 
 #include <benchmark/benchmark.h>
 
+#include <cmath>
 #include <memory>
 #include <random>
 
@@ -172,6 +173,24 @@ template <class S, bool kFriction> void respondAndPropagate(benchmark::State& st
   perItem(state, propagate ? double(n) : double(live));
 }
 
+/// The broad phase's rebuild (VertexBins::build) on a 256 x 256 sheet of 5 mm, rippled by 5 cm so that its faces
+/// and cells vary: ns per vertex. On a 256 x 256 cloth settling over a ball it was 7 % of a step (docs/benchmarks.md).
+void binsBuild(benchmark::State& state) {
+  drape::SheetDesc g;
+  g.nx = g.ny = 256;
+  g.spacing = 0.005;
+  const auto asset = drape::ClothAsset<float>::sheet(g);
+  std::vector<drape::Vec3<float>> x(asset.restPositions);
+  for (auto& p : x) p.z() += 0.05f * std::sin(40 * p.x()) * std::cos(30 * p.y());
+  drape::VertexBins<float> bins;
+  bins.setTopology(asset.triangles, asset.vertexCount(), 0.01f);
+  for (auto _ : state) {
+    bins.build(x.data(), asset.triangles);
+    benchmark::ClobberMemory();
+  }
+  perItem(state, double(asset.vertexCount()));
+}
+
 BENCHMARK(distanceSet<float>)->ArgNames({"set", "simd"})->ArgsProduct({{0, 1, 2}, {0, 1, 2}});
 BENCHMARK(distanceSet<double>)->ArgNames({"set", "simd"})->ArgsProduct({{0, 1, 2}, {0}});
 BENCHMARK(integrate<float>)->ArgName("update")->DenseRange(0, 1);
@@ -187,6 +206,7 @@ BENCHMARK(faceQuery<drape::MeshShape, float, true>);  // culled
 BENCHMARK(faceDescent<float>);
 BENCHMARK(respondAndPropagate<float, false>)->ArgName("propagate")->DenseRange(0, 1);
 BENCHMARK(respondAndPropagate<float, true>)->ArgName("propagate")->Arg(0);
+BENCHMARK(binsBuild);
 
 }  // namespace
 

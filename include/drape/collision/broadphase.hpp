@@ -67,12 +67,19 @@ template <Scalar S> class VertexBins {
       hi = hi.cwiseMax(x[i]);
       reach_[std::size_t(i)] = 0;
     }
-    maxReach_ = 0;
+    // Squares first and one root per vertex: a root is monotone, so these are the same reaches bit for bit as a
+    // root per face. The largest is kept in a local: as a member, every store into reach_ might have changed it.
     for (const auto& t : triangles) {
-      const S r = std::sqrt(std::max((x[t[1]] - x[t[0]]).squaredNorm(), (x[t[2]] - x[t[0]]).squaredNorm()));
-      reach_[std::size_t(t[0])] = std::max(reach_[std::size_t(t[0])], r);
-      maxReach_ = std::max(maxReach_, r);
+      S& own = reach_[std::size_t(t[0])];
+      own = std::max(own, std::max((x[t[1]] - x[t[0]]).squaredNorm(), (x[t[2]] - x[t[0]]).squaredNorm()));
     }
+    S most = 0;
+    for (Index i = 0; i < vertexCount_; ++i) {
+      S& own = reach_[std::size_t(i)];
+      own = rootOf(own);
+      most = std::max(most, own);
+    }
+    maxReach_ = most;
     // At most about two cells per vertex: a cloth spread thin over a large box gets larger cells.
     const double maxCells = 2.0 * double(vertexCount_) + 64;
     double size = double(cell_);
