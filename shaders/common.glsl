@@ -225,9 +225,10 @@ void symmetricEigen3(inout float a[3][3], out float v[3][3]) {
 }
 
 // leastSquaresCompromise's twin: DRAPE_LEAST_SQUARES_PASSES passes, each the violated planes' least-squares move
-// along the eigen-directions of sum_k n_k n_k^T whose eigenvalue is at least 1 / kReach^2.
-vec3 leastSquaresCompromise(vec3 n[DRAPE_CONTACT_SLOTS], float b[DRAPE_CONTACT_SLOTS], int count, vec3 from) {
-  const float kWeakest = 1.0 / (DRAPE_REACH * DRAPE_REACH);
+// along the eigen-directions of sum_k n_k n_k^T whose eigenvalue is at least 1 / reach^2.
+vec3 leastSquaresCompromise(vec3 n[DRAPE_CONTACT_SLOTS], float b[DRAPE_CONTACT_SLOTS], int count, vec3 from,
+                            float reach) {
+  precise const float kWeakest = 1.0 / (reach * reach);
   vec3 y = from;
   for (int pass = 0; pass < DRAPE_LEAST_SQUARES_PASSES; ++pass) {
     float a[3][3] = float[3][3](float[3](0.0, 0.0, 0.0), float[3](0.0, 0.0, 0.0), float[3](0.0, 0.0, 0.0));
@@ -265,14 +266,19 @@ bool feasibleIn(vec3 n[DRAPE_CONTACT_SLOTS], float b[DRAPE_CONTACT_SLOTS], int c
   return true;
 }
 
-vec3 nearestInHalfSpaces(vec3 n[DRAPE_CONTACT_SLOTS], float b[DRAPE_CONTACT_SLOTS], int count, vec3 y0,
-                         vec3 fallback, float minReach) {
-  if (feasibleIn(n, b, count, y0)) return y0;
+// halfSpaceViolation's twin: how far y0 is outside the half-spaces, summed.
+float halfSpaceViolation(vec3 n[DRAPE_CONTACT_SLOTS], float b[DRAPE_CONTACT_SLOTS], int count, vec3 y0) {
   precise float violation = 0.0;
   for (int k = 0; k < count; ++k) violation = violation + max(b[k] - dot3(n[k], y0), 0.0);
-  precise const float reach = max(kReach * violation, minReach);
+  return violation;
+}
+
+// nearestOnPlanes's twin: the nearest feasible point to y0 among the projections onto every subset of the planes,
+// within `reach`; false where there is none.
+bool nearestOnPlanes(vec3 n[DRAPE_CONTACT_SLOTS], float b[DRAPE_CONTACT_SLOTS], int count, vec3 y0, float reach,
+                     out vec3 best) {
   precise const float reach2 = reach * reach;
-  vec3 best = y0;
+  best = y0;
   bool found = false;
   float bestDist = 0.0;
   vec3 candidate[7];
@@ -321,9 +327,32 @@ vec3 nearestInHalfSpaces(vec3 n[DRAPE_CONTACT_SLOTS], float b[DRAPE_CONTACT_SLOT
     if ((!found || dist < bestDist) && dist <= reach2 && feasibleIn(n, b, count, candidate[c]))
       best = candidate[c], bestDist = dist, found = true;
   }
-  if (found) return best;
-  return leastSquaresCompromise(n, b, count, fallback);
+  return found;
 }
+
+vec3 nearestInHalfSpaces(vec3 n[DRAPE_CONTACT_SLOTS], float b[DRAPE_CONTACT_SLOTS], int count, vec3 y0,
+                         vec3 fallback, float minReach) {
+  if (feasibleIn(n, b, count, y0)) return y0;
+  precise const float reach = max(kReach * halfSpaceViolation(n, b, count, y0), minReach);
+  vec3 best;
+  if (nearestOnPlanes(n, b, count, y0, reach, best)) return best;
+  return leastSquaresCompromise(n, b, count, fallback, DRAPE_REACH);
+}
+
+// placeSettlePoint's twin: where a vertex whose exact point `to` the fields judged goes (docs/design.md §16,
+// "Exact points tested"): `to` where every plane it lies on is backed, the compromise cut at 1/kRefusedReach^2
+// where some is, else the first fraction of the segment from `from` that every field leaves clear (`to` where
+// not even it is).
+vec3 placeSettlePoint(vec3 from, vec3 to, uint planes, uint backed, uint clear, vec3 n[DRAPE_CONTACT_SLOTS],
+                      float b[DRAPE_CONTACT_SLOTS], int count, vec3 fallback) {
+  if ((backed & planes) == planes) return to;
+  if (backed != 0u) return leastSquaresCompromise(n, b, count, fallback, DRAPE_REFUSED_REACH);
+  if (((clear >> uint(DRAPE_SEGMENT_FRACTIONS - 1)) & 1u) == 0u) return to;
+  precise const float f = float(findLSB(clear) + 1) / float(DRAPE_SEGMENT_FRACTIONS);
+  precise const vec3 q = from + f * (to - from);
+  return q;
+}
+
 
 // The solid's field, packed by drape::gpu::packShape (include/drape/gpu/shapes.hpp).
 layout(location = DRAPE_U_SHAPE) uniform vec4 shape[5];

@@ -21,6 +21,17 @@ inline constexpr double kCornerDeterminant = 1e-4;
 inline constexpr double kReach = 4;
 /// Passes of the least-squares compromise for a point pinched between surfaces (leastSquaresCompromise).
 inline constexpr int kLeastSquaresPasses = 2;
+/// The settle's exact point y is tested against the true fields (docs/design.md §16, "Exact points tested"): a
+/// plane is one y lies on within this share of the vertex's total violation, and a field reads y as on its
+/// surface within the thickness and that share.
+inline constexpr double kExactPointSlack = 0.25;
+/// A solid backs a plane at y where its gradient there is within this cosine of the plane's normal (5.7 degrees).
+inline constexpr double kBackedCos = 0.995;
+/// A refused exact point with some plane backed takes the least-squares compromise cut at 1/this^2.
+inline constexpr double kRefusedReach = 2.5;
+/// One with none backed takes the first of this many fractions of the segment from the vertex to y that every
+/// solid leaves clear (one bit each in a 32-bit word: at most 32).
+inline constexpr int kSegmentFractions = 32;
 /// Sweeps of Jacobi rotations in the eigen-decomposition of its 3x3 normal matrix (symmetricEigen3).
 inline constexpr int kEigenSweeps = 5;
 /// An off-diagonal entry at most this times the sum of its two diagonal entries is left alone by the rotations.

@@ -13,6 +13,7 @@
 #include <memory>
 #include <numbers>
 #include <random>
+#include <tuple>
 #include <vector>
 
 namespace {
@@ -95,24 +96,99 @@ std::vector<Vec3<float>> unpacked(const std::vector<layout::Vertex>& p) {
 }  // namespace
 
 TEST_CASE("settle: the GPU placement outside several contact planes against projectOntoContactPlanes", "[gpu]") {
+  // The random records' planes are tangents of no solid but the floor's, whose plane slot 0 of every other vertex
+  // takes: so the fields back some exact points (the floor's plane), refuse others with a plane backed (the
+  // compromise) and refuse the rest outright (the segment, through a ball and a box).
   drape::test::gpuContext().makeCurrent();
   const int n = 3000;
+  const float thickness = 0.005f;
   RandomContacts r(n, 7);
+  drape::ContactSlot<float> floorSlot;
+  floorSlot.normal = Vec3<float>::UnitZ();
+  floorSlot.offset = thickness;
+  floorSlot.body = -1;
+  for (int i = 1; i < n; i += 2) {  // of the vertices with two or three slots, every other one
+    r.cpu.slots[std::size_t(i)][0] = floorSlot;
+    putSlot(r.gpu[std::size_t(i)], 0, floorSlot);
+  }
+  drape::Solid<drape::Sphere> ball;
+  ball.shape.radius = 0.04;
+  ball.pose.position = {0.02, 0.01, 0.0};
+  drape::Solid<drape::Box> block;
+  block.shape.halfExtents = {0.03, 0.02, 0.05};
+  block.pose.position = {-0.04, -0.03, 0.01};
+  const Eigen::Vector3d origin = Eigen::Vector3d::Zero();
+  using drape::CompiledSolid;
+  const std::tuple<std::vector<CompiledSolid<drape::Plane, float>>, std::vector<CompiledSolid<drape::Sphere, float>>,
+                   std::vector<CompiledSolid<drape::Box, float>>>
+      solids{{drape::detail::compileSolid<drape::Plane, float>(drape::Solid<drape::Plane>{}, origin)},
+             {drape::detail::compileSolid<drape::Sphere, float>(ball, origin)},
+             {drape::detail::compileSolid<drape::Box, float>(block, origin)}};
+  const drape::SettleFields<float, decltype(solids)> fields{solids, thickness};
   std::vector<Vec3<float>> x = r.x;
-  drape::projectOntoContactPlanes(0, n, r.cpu, x.data(), r.reference.data(), r.x.data());
+  drape::projectOntoContactPlanes(0, n, r.cpu, x.data(), r.reference.data(), r.x.data(), fields);
+
+  // What the fields decided, counted on the CPU's own steps.
+  int taken = 0, compromised = 0, segment = 0;
+  for (int i = 0; i < n; ++i) {
+    const int count = r.cpu.slotCount[std::size_t(i)];
+    if (count < 2 || r.cpu.overflow[std::size_t(i)] == r.cpu.current) continue;
+    Vec3<float> nk[3];
+    float bk[3];
+    for (int k = 0; k < count; ++k) {
+      const drape::ContactSlot<float>& c = r.cpu.slots[std::size_t(i)][std::size_t(k)];
+      nk[k] = c.normal, bk[k] = c.offset;
+    }
+    const Vec3<float> y0 = r.x[std::size_t(i)];
+    if (drape::insideHalfSpaces(nk, bk, count, y0)) continue;
+    const float violation = drape::halfSpaceViolation(nk, bk, count, y0);
+    drape::SettlePoint<float> p{y0, y0, float(drape::constants::kExactPointSlack) * violation, 0u};
+    if (!drape::nearestOnPlanes(nk, bk, count, y0, float(drape::constants::kReach) * violation, p.to)) continue;
+    for (int k = 0; k < count; ++k)
+      if (nk[k].dot(p.to) - bk[k] <= p.slack) p.planes |= 1u << k;
+    const unsigned backed = fields.backed(p, nk);
+    ((backed & p.planes) == p.planes ? taken : backed != 0u ? compromised : segment) += 1;
+  }
+  INFO("exact points taken " << taken << ", refused to the compromise " << compromised << ", to the segment "
+                             << segment);
+  REQUIRE(taken > 50);
+  REQUIRE(compromised > 50);
+  REQUIRE(segment > 50);
 
   drape::gpu::Buffer<layout::Vertex> gx(packed(r.x, 1.0f)), gref(packed(r.reference, 1.0f));
   drape::gpu::Buffer<layout::Contact> gc(r.gpu);
+  drape::gpu::Buffer<layout::SettlePoint> points{std::vector<layout::SettlePoint>(std::size_t(n))};
   gx.bind(layout::kPositions);
   gref.bind(layout::kPacked);
   gc.bind(layout::kContacts);
-  drape::gpu::Program k("settle", drape::gpu::shaders::settle);
-  k.set(layout::kCount, unsigned(n));
+  points.bind(layout::kSettlePoints);
+  drape::gpu::Program plan("settle", drape::gpu::shaders::settle);
+  drape::gpu::Program place("settle", drape::gpu::shaders::settle, "#define DRAPE_SETTLE_PLACE 1\n");
+  drape::gpu::SolidKernels kernels;
+  std::vector<drape::gpu::SolidPass> passes;
+  std::apply([&](const auto&... lists) {
+    (..., [&](const auto& list) {
+      kernels.compileSettleFor(list[0]);
+      passes.push_back(kernels.pass(list[0]));
+    }(lists));
+  }, solids);
+  const auto settle = [&](bool indirect, GLuint commands) {
+    for (const drape::gpu::Program* k : {&plan, &place}) k->set(layout::kCount, unsigned(n));
+    const auto run = [&](const drape::gpu::Program& k) {
+      if (indirect) k.dispatchIndirect(commands, 0);
+      else k.dispatch(n);
+    };
+    run(plan);
+    for (const auto& p : passes)
+      if (indirect) kernels.settlePass(p, thickness, unsigned(n), commands, 0);
+      else kernels.settlePass(p, thickness, unsigned(n));
+    run(place);
+  };
   // A settle pass whose vertex passes found nothing runs from a command they left cleared: no move.
   drape::gpu::Buffer<std::uint32_t> noWork(std::vector<std::uint32_t>(3, 0u));
-  k.dispatchIndirect(noWork.id(), 0);
+  settle(true, noWork.id());
   REQUIRE(drape::test::largestDifference(unpacked(gx.read()), r.x) == 0);
-  k.dispatch(n);
+  settle(false, 0);
   const auto gpuX = unpacked(gx.read());
 
   int moved = 0;

@@ -114,7 +114,7 @@ template <Scalar S> class ContactPasses {
     withFlags([&](auto withFaces, auto cull) { project<withFaces(), withFaces() && cull(), true>(compiled, in); },
               faces, in.culling);
     if (!reconcile) return;  // a lone plane gives each vertex one surface: nothing to reconcile
-    settle(in);
+    settle(compiled, in);
     if (solidCount < 2) return;
     for (int pass = 0; pass < constants::kSettlePasses; ++pass) {
       // Every thread reads the count here, between two barriers (the one ending the loop above and the one
@@ -123,7 +123,7 @@ template <Scalar S> class ContactPasses {
       DRAPE_OMP(barrier)
       project<false, false, false>(compiled, in, S(constants::kSettleSlack) * in.thickness);
       if (stats_.vertexContacts == before) break;
-      settle(in);
+      settle(compiled, in);
     }
   }
 
@@ -325,11 +325,13 @@ template <Scalar S> class ContactPasses {
     DRAPE_OMP(barrier)
   }
 
-  void settle(const PassInputs<S>& in) {
+  /// The placement outside each vertex's contact planes, its exact points tested against every solid's field.
+  template <class Solids> void settle(const Solids& compiled, const PassInputs<S>& in) {
     const Vec3<S>* binned = useBins_ ? bins_.binned() : in.x;
+    const SettleFields<S, Solids> fields{compiled, in.thickness};
     S moved = 0;
     teamForNoWait(Index(contacts_.size()), [&](Index b, Index e) {
-      moved = projectOntoContactPlanes(b, e, contacts_, in.x, in.settleStart, binned);
+      moved = projectOntoContactPlanes(b, e, contacts_, in.x, in.settleStart, binned, fields);
     });
     teamMax(moveBound_, moved);
     DRAPE_OMP(barrier)

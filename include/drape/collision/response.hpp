@@ -13,9 +13,12 @@
 #include <drape/detail/simd.hpp>
 
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <tuple>
+#include <type_traits>
 #include <vector>
 
 namespace drape {
@@ -894,8 +897,11 @@ template <Scalar S> void symmetricEigen3(S (&a)[3][3], S (&v)[3][3]) {
 /// So eigen-directions of sum_k n_k n_k^T whose eigenvalue is below 1/kReach^2, along which the planes would move
 /// the point more than kReach times its violation, are left out: between two facing planes the point goes to the
 /// middle of the gap. kLeastSquaresPasses passes, each on the planes still violated.
-template <Scalar S> Vec3<S> leastSquaresCompromise(const Vec3<S>* n, const S* b, int count, const Vec3<S>& from) {
-  constexpr S kWeakest = S(1 / (constants::kReach * constants::kReach));
+/// `reach` sets that cut (a refused exact point of the settle takes kRefusedReach).
+template <Scalar S>
+Vec3<S> leastSquaresCompromise(const Vec3<S>* n, const S* b, int count, const Vec3<S>& from,
+                               double reach = constants::kReach) {
+  const S kWeakest = S(1 / (reach * reach));
   Vec3<S> y = from;
   for (int pass = 0; pass < constants::kLeastSquaresPasses; ++pass) {
     S a[3][3] = {}, v[3][3];
@@ -919,32 +925,29 @@ template <Scalar S> Vec3<S> leastSquaresCompromise(const Vec3<S>* n, const S* b,
   return y;
 }
 
-/// The point nearest to y0 in {y : n_k . y >= b_k} for up to three half-spaces: the nearest feasible point
-/// among the projections onto every subset of the planes, which is the exact projection onto their
-/// intersection. The planes are tangents of curved surfaces, so far from y0 they say nothing: two nearly
-/// facing planes (a cloth pinched under a box whose merged normal is tilted a little) meet far away, and going
-/// there would throw the point sideways. A candidate further than kReach times the total violation (or than
-/// `minReach`, if that is more) counts as none; where there is none (also when the half-spaces do not meet, as
-/// in a gap narrower than twice the thickness), the answer is the least-squares compromise from `fallback`
-/// (leastSquaresCompromise: between two facing planes, the middle of the gap).
-template <Scalar S>
-Vec3<S> nearestInHalfSpaces(const Vec3<S>* n, const S* b, int count, const Vec3<S>& y0, const Vec3<S>& fallback,
-                            S minReach = S(0)) {
-  auto feasible = [&](const Vec3<S>& y) {
-    for (int k = 0; k < count; ++k)
-      if (n[k].dot(y) < b[k] - S(constants::kFeasibleSlack) * std::max(S(1), std::abs(b[k]))) return false;
-    return true;
-  };
-  if (feasible(y0)) return y0;
+/// Whether y lies in every half-space n_k . y >= b_k, up to kFeasibleSlack times max(1, |b_k|).
+template <Scalar S> bool insideHalfSpaces(const Vec3<S>* n, const S* b, int count, const Vec3<S>& y) {
+  for (int k = 0; k < count; ++k)
+    if (n[k].dot(y) < b[k] - S(constants::kFeasibleSlack) * std::max(S(1), std::abs(b[k]))) return false;
+  return true;
+}
+
+/// How far y0 is outside up to three half-spaces, summed over them.
+template <Scalar S> S halfSpaceViolation(const Vec3<S>* n, const S* b, int count, const Vec3<S>& y0) {
   S violation = 0;
   for (int k = 0; k < count; ++k) violation += std::max(b[k] - n[k].dot(y0), S(0));
-  const S reach = std::max(S(constants::kReach) * violation, minReach);
+  return violation;
+}
+
+/// The exact point of nearestInHalfSpaces: the nearest feasible point to y0 (outside some half-space) among the
+/// projections onto every subset of the planes, within `reach` of y0; false where there is none.
+template <Scalar S>
+bool nearestOnPlanes(const Vec3<S>* n, const S* b, int count, const Vec3<S>& y0, S reach, Vec3<S>& best) {
   const S reach2 = reach * reach;
-  Vec3<S> best = y0;
   S bestDist = std::numeric_limits<S>::infinity();
   auto consider = [&](const Vec3<S>& y) {
     const S d = (y - y0).squaredNorm();
-    if (d < bestDist && d <= reach2 && feasible(y)) best = y, bestDist = d;
+    if (d < bestDist && d <= reach2 && insideHalfSpaces(n, b, count, y)) best = y, bestDist = d;
   };
   for (int k = 0; k < count; ++k) consider(y0 + (b[k] - n[k].dot(y0)) * n[k]);
   for (int j = 0; j < count; ++j)
@@ -959,9 +962,115 @@ Vec3<S> nearestInHalfSpaces(const Vec3<S>* n, const S* b, int count, const Vec3<
     m << n[0].transpose(), n[1].transpose(), n[2].transpose();
     if (std::abs(m.determinant()) > S(constants::kCornerDeterminant)) consider(m.partialPivLu().solve(Vec3<S>(b[0], b[1], b[2])));
   }
-  if (bestDist < std::numeric_limits<S>::infinity()) return best;
+  return bestDist < std::numeric_limits<S>::infinity();
+}
+
+/// The point nearest to y0 in {y : n_k . y >= b_k} for up to three half-spaces: the nearest feasible point
+/// among the projections onto every subset of the planes, which is the exact projection onto their
+/// intersection. The planes are tangents of curved surfaces, so far from y0 they say nothing: two nearly
+/// facing planes (a cloth pinched under a box whose merged normal is tilted a little) meet far away, and going
+/// there would throw the point sideways. A candidate further than kReach times the total violation (or than
+/// `minReach`, if that is more) counts as none; where there is none (also when the half-spaces do not meet, as
+/// in a gap narrower than twice the thickness), the answer is the least-squares compromise from `fallback`
+/// (leastSquaresCompromise: between two facing planes, the middle of the gap).
+template <Scalar S>
+Vec3<S> nearestInHalfSpaces(const Vec3<S>* n, const S* b, int count, const Vec3<S>& y0, const Vec3<S>& fallback,
+                            S minReach = S(0)) {
+  if (insideHalfSpaces(n, b, count, y0)) return y0;
+  const S reach = std::max(S(constants::kReach) * halfSpaceViolation(n, b, count, y0), minReach);
+  Vec3<S> best;
+  if (nearestOnPlanes(n, b, count, y0, reach, best)) return best;
   return leastSquaresCompromise(n, b, count, fallback);
 }
+
+/// The settle's exact point for one vertex, before the true fields have judged it (docs/design.md §16, "Exact
+/// points tested"): the vertex `from`, the point `to` on its planes, the slack (kExactPointSlack of the vertex's
+/// violation), and the planes `to` lies on within that slack (bit k: slot k).
+template <Scalar S> struct SettlePoint {
+  Vec3<S> from, to;
+  S slack;
+  unsigned planes;
+};
+
+/// Bits of p.planes that the solid's surface backs at p.to: its box grown by the thickness and the slack holds
+/// the point, its field reads at most the thickness and the slack there, and its gradient is within kBackedCos
+/// of the plane's normal. A flat wall backs its plane everywhere; an edge's or a curved solid's tangent only near
+/// where it touched.
+template <class Shape, Scalar S>
+unsigned backedPlanes(const CompiledSolid<Shape, S>& solid, const SettlePoint<S>& p, const Vec3<S>* normals,
+                      S thickness) {
+  const S reach = thickness + p.slack;
+  if (solid.bounded && ((p.to.array() < solid.boxLow.array() - reach).any() ||
+                        (p.to.array() > solid.boxHigh.array() + reach).any()))
+    return 0u;
+  Vec3<S> g;
+  if (!(solid.sdf(p.to, g) <= reach)) return 0u;
+  unsigned backed = 0;
+  for (int k = 0; k < constants::kContactSlots; ++k)
+    if ((p.planes >> k & 1u) && g.dot(normals[k]) >= S(constants::kBackedCos)) backed |= 1u << k;
+  return backed;
+}
+
+/// Bits of the segment's fractions (bit j: from + (j + 1) / kSegmentFractions of the way to `to`) where the solid
+/// reads at least the thickness less the slack (a point outside its box grown by the thickness does).
+template <class Shape, Scalar S>
+std::uint32_t clearFractions(const CompiledSolid<Shape, S>& solid, const SettlePoint<S>& p, S thickness) {
+  std::uint32_t clear = 0;
+  const S limit = thickness - p.slack;
+  for (int j = 0; j < constants::kSegmentFractions; ++j) {
+    const Vec3<S> q = p.from + (S(j + 1) / S(constants::kSegmentFractions)) * (p.to - p.from);
+    Vec3<S> g;
+    if ((solid.bounded && ((q.array() < solid.boxLow.array() - thickness).any() ||
+                           (q.array() > solid.boxHigh.array() + thickness).any())) ||
+        !(solid.sdf(q, g) < limit))
+      clear |= std::uint32_t(1) << j;
+  }
+  return clear;
+}
+
+/// Where a vertex whose exact point the fields judged goes: the point itself where every plane it lies on is
+/// backed; the least-squares compromise from `fallback`, its weak directions cut at 1/kRefusedReach^2, where
+/// some is (a floor backs its plane, an edge's tangent does not); else the first fraction of the segment that
+/// every solid leaves clear (two tangents of a rod), or the point where not even it is clear.
+template <Scalar S>
+Vec3<S> placeSettlePoint(const SettlePoint<S>& p, unsigned backed, std::uint32_t clear, const Vec3<S>* n,
+                         const S* b, int count, const Vec3<S>& fallback) {
+  if ((backed & p.planes) == p.planes) return p.to;
+  if (backed != 0u) return leastSquaresCompromise(n, b, count, fallback, constants::kRefusedReach);
+  constexpr int kLast = constants::kSegmentFractions - 1;
+  if (!(clear >> kLast & 1u)) return p.to;
+  const int j = std::countr_zero(clear);
+  return p.from + (S(j + 1) / S(constants::kSegmentFractions)) * (p.to - p.from);
+}
+
+/// The fields a settle tests its exact points against: every solid of `compiled` (a tuple of vectors of
+/// CompiledSolid). With no solid at all, no plane is backed and every fraction is clear.
+template <Scalar S, class Solids> struct SettleFields {
+  const Solids& compiled;
+  S thickness;
+
+  unsigned backed(const SettlePoint<S>& p, const Vec3<S>* normals) const {
+    unsigned bits = 0;
+    std::apply([&](const auto&... lists) {
+      (..., [&](const auto& list) {
+        for (const auto& solid : list) bits |= backedPlanes(solid, p, normals, thickness);
+      }(lists));
+    }, compiled);
+    return bits;
+  }
+  std::uint32_t clear(const SettlePoint<S>& p) const {
+    std::uint32_t bits = ~std::uint32_t(0);
+    std::apply([&](const auto&... lists) {
+      (..., [&](const auto& list) {
+        for (const auto& solid : list) bits &= clearFractions(solid, p, thickness);
+      }(lists));
+    }, compiled);
+    return bits;
+  }
+};
+
+/// Takes every exact point as it is: the planes alone decide (the placement's geometry, without the fields).
+struct PlanesTrusted {};
 
 /// A vertex pushed out of several surfaces one after another (a crease, a box corner, a cloth pinched
 /// between two solids) may end up back inside an earlier one, and alternating projections close in slowly
@@ -969,11 +1078,12 @@ Vec3<S> nearestInHalfSpaces(const Vec3<S>* n, const S* b, int count, const Vec3<
 /// contact half-spaces at once (nearestInHalfSpaces). A pinched vertex starts its least-squares placement
 /// from `reference` (where it was before this substep's contacts moved it): the projections it went through
 /// on the way, some of them sideways off an edge, are forgotten rather than repeated every substep, which
-/// would feed the constraint solve a sideways jump each substep. For vertices [begin, end); returns the
+/// would feed the constraint solve a sideways jump each substep. An exact point is tested against `fields`
+/// (SettleFields; placeSettlePoint) unless they are PlanesTrusted. For vertices [begin, end); returns the
 /// largest distance of a moved vertex from `binned`.
-template <Scalar S>
+template <Scalar S, class Fields = PlanesTrusted>
 S projectOntoContactPlanes(Index begin, Index end, const ContactBuffer<S>& contacts, Vec3<S>* x,
-                           const Vec3<S>* reference, const Vec3<S>* binned) {
+                           const Vec3<S>* reference, const Vec3<S>* binned, const Fields& fields = {}) {
   S moved = 0;
   for (Index i = begin; i < end; ++i) {
     if (!contacts.live(i)) continue;
@@ -986,7 +1096,24 @@ S projectOntoContactPlanes(Index begin, Index end, const ContactBuffer<S>& conta
     Vec3<S> normals[ContactBuffer<S>::kSlots];
     S offsets[ContactBuffer<S>::kSlots];
     for (int k = 0; k < count; ++k) normals[k] = sl[k].normal, offsets[k] = sl[k].offset;
-    x[i] = nearestInHalfSpaces(normals, offsets, count, x[i], reference[i]);
+    if constexpr (std::is_same_v<Fields, PlanesTrusted>) {
+      x[i] = nearestInHalfSpaces(normals, offsets, count, x[i], reference[i]);
+    } else {
+      if (!insideHalfSpaces(normals, offsets, count, x[i])) {
+        const S violation = halfSpaceViolation(normals, offsets, count, x[i]);
+        SettlePoint<S> p{x[i], x[i], S(constants::kExactPointSlack) * violation, 0u};
+        if (nearestOnPlanes(normals, offsets, count, x[i], S(constants::kReach) * violation, p.to)) {
+          for (int k = 0; k < count; ++k)
+            if (normals[k].dot(p.to) - offsets[k] <= p.slack) p.planes |= 1u << k;
+          const unsigned backed = fields.backed(p, normals);
+          // The segment is searched only where no plane is backed (it decides only there).
+          const std::uint32_t clear = backed != 0u ? 0u : fields.clear(p);
+          x[i] = placeSettlePoint(p, backed, clear, normals, offsets, count, reference[i]);
+        } else {
+          x[i] = leastSquaresCompromise(normals, offsets, count, reference[i]);
+        }
+      }
+    }
     moved = std::max(moved, (x[i] - binned[i]).squaredNorm());
   }
   return std::sqrt(moved);

@@ -52,6 +52,7 @@ enum Binding : unsigned {
   kHeld = 26,             ///< vec4 per face, colour by colour: where it was last deepest in a solid (barycentric),
                           ///<   w = that solid's place + 1, 0 for none (HeldPoints)
   kSpacers = 27,          ///< SpacerRecord: a header (vertex: how many follow; body: room) and this substep's pinches
+  kSettlePoints = 28,     ///< SettlePoint per vertex: the settle's exact point while the fields judge it
 };
 
 /// Uniform locations (set per dispatch with glProgramUniform*).
@@ -196,6 +197,20 @@ struct PinSlot {
 };
 static_assert(sizeof(PinSlot) == 16 && offsetof(PinSlot, vertex) == 12);
 
+/// The settle's exact point for one vertex while the solids' fields judge it (the CPU's SettlePoint, with the
+/// fields' answers): the point (m) with the slack in w; in bits[0] the planes it lies on (bit k: slot k), the
+/// planes some field backs (bit 4 + k) and kSettleWaiting while it waits, in bits[1] the segment's fractions every
+/// field so far leaves clear (bit j: fraction j + 1 of kSegmentFractions).
+struct SettlePoint {
+  float point[4];
+  std::uint32_t bits[4];
+};
+static_assert(sizeof(SettlePoint) == 32 && offsetof(SettlePoint, bits) == 16);
+/// SettlePoint::bits[0]: the point waits for the fields' answers.
+inline constexpr unsigned kSettleWaiting = 1u << 8;
+/// SettlePoint::bits[0]: the first bit of the backed planes.
+inline constexpr unsigned kSettleBackedShift = 4;
+
 /// The per-vertex element: four floats, 16 bytes, as std430 lays out a vec4 array.
 struct Vertex {
   float x, y, z, w;
@@ -281,6 +296,9 @@ inline std::string preamble(const std::string& defines = {}) {
   s += define("DRAPE_U_FRESH", kFresh);
   s += define("DRAPE_U_SWEEP", kSweep);
   s += define("DRAPE_CONTACT_SLOTS", kContactSlots);
+  s += define("DRAPE_B_SETTLE_POINTS", kSettlePoints);
+  s += define("DRAPE_SETTLE_WAITING", kSettleWaiting);
+  s += define("DRAPE_SETTLE_BACKED_SHIFT", kSettleBackedShift);
   // drape/kernel_constants.hpp, rounded to float as the kernels use them.
   s += define("DRAPE_MERGE_COS", constants::kMergeCos);
   s += define("DRAPE_FEASIBLE_SLACK", constants::kFeasibleSlack);
@@ -289,6 +307,10 @@ inline std::string preamble(const std::string& defines = {}) {
   s += define("DRAPE_REACH", constants::kReach);
   s += define("DRAPE_FACE_MOVE_CAP", constants::kFaceMoveCap);
   s += define("DRAPE_LEAST_SQUARES_PASSES", constants::kLeastSquaresPasses);
+  s += define("DRAPE_EXACT_POINT_SLACK", constants::kExactPointSlack);
+  s += define("DRAPE_BACKED_COS", constants::kBackedCos);
+  s += define("DRAPE_REFUSED_REACH", constants::kRefusedReach);
+  s += define("DRAPE_SEGMENT_FRACTIONS", constants::kSegmentFractions);
   s += define("DRAPE_EIGEN_SWEEPS", constants::kEigenSweeps);
   s += define("DRAPE_EIGEN_NEGLIGIBLE", constants::kEigenNegligible);
   s += define("DRAPE_MAX_CUTS", constants::kMaxCuts);
@@ -343,6 +365,7 @@ inline std::string preamble(const std::string& defines = {}) {
   s += "struct Constraint { uint a; uint b; float rest; uint pad; };\n";
   s += "struct Contact { vec4 normal[DRAPE_CONTACT_SLOTS]; vec4 velocity[DRAPE_CONTACT_SLOTS]; "
        "vec4 friction[DRAPE_CONTACT_SLOTS]; ivec4 body; uvec4 slots; vec4 normalDv; };\n";
+  s += "struct SettlePoint { vec4 point; uvec4 bits; };\n";
   s += "struct Ring { vec4 normal; float amount; uint reached; uint pad0; uint pad1; };\n";
   s += "struct PinSlot { vec3 target; uint vertex; };\n";
   s += "struct Lines { vec4 push[DRAPE_CONTACT_SLOTS]; vec4 moment[DRAPE_CONTACT_SLOTS]; };\n";

@@ -77,6 +77,16 @@ class SolidKernels {
     }
   }
 
+  /// The settle's judgement of exact points by the shape's field (settle_fields.comp), for a scene where vertices
+  /// may touch several surfaces; compiled before anything moves.
+  template <class Shape> void compileSettleFor(const CompiledSolid<Shape, float>&) {
+    ShapeKernels& k = kernels_[shapeCode<Shape>()];
+    if (!k.settleReady) {
+      k.settle = Program("settle_fields", shaders::settle_fields, shapeDefine<Shape>());
+      k.settleReady = true;
+    }
+  }
+
   /// The shape data a solid's field reads from its own buffer (layout::kShapeData): a mesh's grid nodes, a hull's
   /// faces and edges. Each grid is uploaded once, however many solids share it; each hull solid builds its own
   /// query data (compileSolid), so it has its own upload.
@@ -157,6 +167,21 @@ class SolidKernels {
     else k.dispatch(vertexCount);
   }
 
+  /// One solid's judgement of the settle's waiting exact points (backedPlanes, clearFractions), dispatched like the
+  /// settle it belongs to (`command` >= 0: by the command at that byte offset of buffer `commands`).
+  void settlePass(const SolidPass& p, float thickness, unsigned vertexCount, GLuint commands = 0,
+                  GLintptr command = -1) const {
+    const Program& k = kernels_[p.code].settle;
+    setShape(k.id(), p.field);
+    k.set(layout::kThickness, thickness);
+    k.set(layout::kBoxLow, p.boxLow.x(), p.boxLow.y(), p.boxLow.z());
+    k.set(layout::kBoxHigh, p.boxHigh.x(), p.boxHigh.y(), p.boxHigh.z());
+    k.set(layout::kCount, vertexCount);
+    if (p.data) p.data->bind(layout::kShapeData);
+    if (command >= 0) k.dispatchIndirect(commands, command);
+    else k.dispatch(vertexCount);
+  }
+
   /// One curved solid's face pass (projectFaceContacts), colour by colour. `heldPlace`: the solid's place among all
   /// the solids + 1, whose held deepest points the pass reads and writes (layout::kHeld), 0 for none.
   void facePass(const SolidPass& p, float thickness, int pgdIterations, const std::vector<std::size_t>& colourOffsets,
@@ -218,8 +243,10 @@ class SolidKernels {
     Program vertices, faces, repel;
     Program verticesBody, facesBody, repelBody;  ///< for a coupled body's solid: its lines and pushes kept too
     Program guard;                               ///< the friction guard (compileGuardFor)
+    Program settle;                              ///< the settle's judgement of exact points (compileSettleFor)
     Program sweepVertices, sweepFaces, sweepVerticesBody, sweepFacesBody;  ///< with the path searches (compileSweepFor)
-    bool ready = false, bodyReady = false, guardReady = false, sweepReady = false, sweepBodyReady = false;
+    bool ready = false, bodyReady = false, guardReady = false, sweepReady = false, sweepBodyReady = false,
+         settleReady = false;
     bool holds = false;  ///< the face pass holds deepest points (kHoldsDeepestPoints): it takes layout::kHeldPlace
   };
   std::array<ShapeKernels, 8> kernels_;  ///< by layout::ShapeCode

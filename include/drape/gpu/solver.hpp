@@ -103,6 +103,7 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
         translate_("translate", shaders::translate),
         pinKernel_("pins", shaders::pins),
         settle_("settle", shaders::settle),
+        settlePlace_("settle", shaders::settle, "#define DRAPE_SETTLE_PLACE 1\n"),
         frictionKernel_("friction", shaders::friction),
         restore_("restore_marked", shaders::restore_marked) {
     // The three sets, colour by colour, in one buffer: set s's colour c starts at offset_[s] + colourOffsets[c].
@@ -241,11 +242,15 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
       if (maySweep && compiled.bounded)
         kernels_.compileSweepFor(compiled, compiled.motion.body >= 0);
       if (mayGuard && compiled.bounded) kernels_.compileGuardFor(compiled);
+      // A scene that reconciles (several solids, or a curved one) judges the settle's exact points by every field.
+      if (solidCount() > 1 || !std::decay_t<decltype(compiled.sdf)>::kLinear) kernels_.compileSettleFor(compiled);
     });
     friction_ = has.friction;
     repulsive_ = has.repulsion;
     reconcile_ = has.reconcile;
     coupled_ = has.coupled;
+    if (reconcile_ && settlePoints_.size() != state_.x.size())
+      settlePoints_.assign(std::vector<layout::SettlePoint>(state_.x.size(), layout::SettlePoint{}));
     sweep_ = settings_.continuousContact && settings_.collisionMethod != CollisionMethod::InSolve && has.bounded > 0;
     // Position friction must not carry a face across a solid: continuous contact with faces guards it.
     guard_ = sweep_ && friction_ && settings_.collisionMethod == CollisionMethod::Faces;
@@ -256,12 +261,23 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
     if (coupled_) coupling_.reserve(state_.x.size(), bodies_.size());  // the coupling's buffers, once it has a body
   }
 
-  /// Vertices with several contact planes go outside all of them (projectOntoContactPlanes); in settle pass
-  /// `pass` only if that pass found a contact (the command its vertex passes wrote).
+  /// Vertices with several contact planes go outside all of them (projectOntoContactPlanes) in three stages
+  /// (docs/design.md §16, "Exact points tested"): the placement, which writes the exact points it finds as waiting;
+  /// each solid's judgement of them; the waiting vertices placed by it. In settle pass `pass` only if that pass
+  /// found a contact (the command its vertex passes wrote).
   void settle(int pass) {
-    settle_.set(layout::kCount, unsigned(vertexCount()));
-    if (pass < 0) settle_.dispatch(std::size_t(vertexCount()));
-    else settle_.dispatchIndirect(settleCommands_.id(), settleCommand(pass));
+    const auto n = unsigned(vertexCount());
+    const float thickness = float(settings_.thickness);
+    const auto run = [&](const Program& k) {
+      k.set(layout::kCount, n);
+      if (pass < 0) k.dispatch(n);
+      else k.dispatchIndirect(settleCommands_.id(), settleCommand(pass));
+    };
+    run(settle_);
+    for (const SolidPass& p : passes_)
+      if (pass < 0) kernels_.settlePass(p, thickness, n);
+      else kernels_.settlePass(p, thickness, n, settleCommands_.id(), settleCommand(pass));
+    run(settlePlace_);
   }
   /// Where settle pass `pass`'s dispatch command lies in settleCommands_, in bytes.
   static GLintptr settleCommand(int pass) { return GLintptr(3 * sizeof(std::uint32_t)) * pass; }
@@ -377,6 +393,7 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
     neighbours_.bind(layout::kNeighbours);
     rings_.bind(layout::kPropagation);
     settleCommands_.bind(layout::kFlags);
+    if (reconcile_) settlePoints_.bind(layout::kSettlePoints);
     if (coupled_) coupling_.bind();
   }
 
@@ -532,6 +549,7 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
   bool reconcile_ = false;   ///< a vertex may touch several surfaces this substep (a curved solid, or several)
   SolidKernels kernels_;  ///< each shape type's kernels, and the solids' shape data
   Buffer<std::uint32_t> settleCommands_;  ///< per settle pass, the dispatch command its vertex passes write
+  Buffer<layout::SettlePoint> settlePoints_;  ///< the settle's exact points while the fields judge them
   bool coupled_ = false;          ///< some solid is a dynamic body this substep
   bool sweep_ = false;            ///< continuous contact this substep (the setting, and a bounded solid)
   bool guard_ = false;            ///< and friction's moves are guarded (guardFriction)
@@ -539,7 +557,7 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
   Buffer<std::uint32_t> guardMarks_;  ///< the guard's marks, cleared as they are undone
   BodyCoupling coupling_;  ///< the coupling's kernels, and its buffers once a scene has a dynamic solid
   Program predict_, solve_, update_, respond_, respondFriction_, propagate_, centre_, translate_, pinKernel_, settle_,
-      frictionKernel_, restore_;
+      settlePlace_, frictionKernel_, restore_;
   Buffer<layout::PinSlot> pinSlots_;
   Buffer<float> pinLambdas_;
   Buffer<std::array<std::uint32_t, 4>> faces_;  ///< the faces, colour by colour (colourFaces)
