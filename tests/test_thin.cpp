@@ -118,7 +118,9 @@ TEMPLATE_TEST_CASE("a cloth pinched under a low box with friction holds still fr
   // A face in contact now keeps the point it was pushed from while that point is as deep as the search's
   // (docs/design.md §3, "Ties between deepest points"). Both readings are asserted: the speed at the frames'
   // ends, and each vertex's move from one frame to the next, which sees a cycle the speed at a frame's end misses.
-  for (const double gapInThicknesses : {1.9, 1.8}) {
+  // At 1.6 thicknesses one place of 16 kept a fold of free cloth beside the box swinging (8e-3 to 1.1e-2 m/s) until
+  // the settle's exact points were judged by the fields (docs/design.md §16, "Exact points tested").
+  for (const double gapInThicknesses : {1.9, 1.8, 1.6}) {
     for (int place = 0; place < 16; ++place) {
       drape::Solver<S> cloth = drape::scenes::makeLowPinch<S>(gapInThicknesses, 0.5, drape::scenes::shiftOf(place));
       constexpr double dt = 0.01;
