@@ -992,6 +992,12 @@ template <Scalar S> struct SettlePoint {
   unsigned planes;
 };
 
+/// Whether q lies outside a bounded solid's box grown by `grow`, where its field reads more than `grow`.
+template <class Shape, Scalar S> bool beyondBox(const CompiledSolid<Shape, S>& solid, const Vec3<S>& q, S grow) {
+  return solid.bounded &&
+         ((q.array() < solid.boxLow.array() - grow).any() || (q.array() > solid.boxHigh.array() + grow).any());
+}
+
 /// Bits of p.planes that the solid's surface backs at p.to: its box grown by the thickness and the slack holds
 /// the point, its field reads at most the thickness and the slack there, and its gradient is within kBackedCos
 /// of the plane's normal. A flat wall backs its plane everywhere; an edge's or a curved solid's tangent only near
@@ -1000,9 +1006,7 @@ template <class Shape, Scalar S>
 unsigned backedPlanes(const CompiledSolid<Shape, S>& solid, const SettlePoint<S>& p, const Vec3<S>* normals,
                       S thickness) {
   const S reach = thickness + p.slack;
-  if (solid.bounded && ((p.to.array() < solid.boxLow.array() - reach).any() ||
-                        (p.to.array() > solid.boxHigh.array() + reach).any()))
-    return 0u;
+  if (beyondBox(solid, p.to, reach)) return 0u;
   Vec3<S> g;
   if (!(solid.sdf(p.to, g) <= reach)) return 0u;
   unsigned backed = 0;
@@ -1020,9 +1024,7 @@ std::uint32_t clearFractions(const CompiledSolid<Shape, S>& solid, const SettleP
   for (int j = 0; j < constants::kSegmentFractions; ++j) {
     const Vec3<S> q = p.from + (S(j + 1) / S(constants::kSegmentFractions)) * (p.to - p.from);
     Vec3<S> g;
-    if ((solid.bounded && ((q.array() < solid.boxLow.array() - thickness).any() ||
-                           (q.array() > solid.boxHigh.array() + thickness).any())) ||
-        !(solid.sdf(q, g) < limit))
+    if (beyondBox(solid, q, thickness) || !(solid.sdf(q, g) < limit))
       clear |= std::uint32_t(1) << j;
   }
   return clear;
