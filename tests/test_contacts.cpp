@@ -12,6 +12,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <memory>
+#include <numbers>
 #include <random>
 #include <tuple>
 #include <type_traits>
@@ -331,4 +333,52 @@ TEMPLATE_TEST_CASE("a cloth drawn frictionless from under the heavy brick is not
   CHECK(r.maxFloorPenetration == 0);
   CHECK(r.maxBrickPenetration == 0);
   CHECK(r.maxStrain < 0.1);
+}
+
+TEMPLATE_TEST_CASE("a solid pressed edge first onto a cloth on the floor does not drag it into the floor by friction",
+                   "[contacts][friction]", float, double) {
+  // A long box turned 30 or 45 degrees about its length comes down edge first at 1 m/s onto a cloth lying on a
+  // floor (friction 0.3 on the box, 0.5 on the floor) and stops with its edge 2 mm or 8 mm above the floor. The
+  // cloth beside the edge touches the box's sloping sides; their position friction carries it along the box's
+  // motion in their tangent planes, which slope into the floor. Before the response kept its vertices out of the
+  // planes (holdOutOfPlane), vertices ended substeps 2.1-12.5 mm below the floor's surface; the floor's contacts
+  // leave every vertex at the thickness, so none may end a substep deeper (docs/design.md §4).
+  using S = TestType;
+  const double thickness = drape::Settings{}.thickness;
+  for (const double tilt : {30.0, 45.0})
+    for (const double gap : {0.002, 0.008}) {
+      drape::SheetDesc grid;
+      grid.nx = grid.ny = 20;
+      grid.spacing = 0.02;
+      grid.placement.position = {0, 0, thickness};
+      drape::Solver<S> cloth(std::make_shared<const drape::ClothAsset<S>>(drape::ClothAsset<S>::sheet(grid)));
+      drape::Solid<drape::Plane> floor;
+      floor.staticFriction = floor.dynamicFriction = 0.5;
+      cloth.addSolid(floor);
+      drape::Solid<drape::Box> box;
+      box.shape.halfExtents = {0.3, 0.05, 0.05};
+      box.motion = drape::Motion::Kinematic;
+      box.staticFriction = box.dynamicFriction = 0.3;
+      const double a = tilt * std::numbers::pi / 180, speed = 1, dt = 1.0 / 60;
+      box.pose.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(a, Eigen::Vector3d::UnitX()));
+      const double low = 0.05 * (std::cos(a) + std::sin(a));  // from the box's centre down to its lowest edge
+      box.pose.position = {0, 0, 0.1 + low};
+      box.linearVelocity = {0, 0, -speed};
+      const drape::Index k = cloth.addSolid(box);
+      double lowest = thickness;
+      for (int f = 0; f < 60; ++f) {
+        cloth.step(dt, [&](const drape::Solver<S>& s) {
+          for (drape::Index i = 0; i < s.vertexCount(); ++i) lowest = std::min(lowest, s.position(i).z());
+        });
+        box.pose.position.z() -= speed * dt;
+        if (box.pose.position.z() - low <= gap) {
+          box.pose.position.z() = gap + low;
+          box.linearVelocity.setZero();
+        }
+        cloth.setSolid(k, box);
+      }
+      INFO("tilt " << tilt << " degrees, the edge stopping " << gap * 1e3 << " mm above the floor: lowest vertex "
+                   << lowest * 1e3 << " mm");
+      CHECK(lowest >= 0.999 * thickness);
+    }
 }

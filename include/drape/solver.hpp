@@ -136,6 +136,11 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     sweep_ = settings_.continuousContact && settings_.collisionMethod != CollisionMethod::InSolve && has.bounded > 0;
     // Position friction must not carry a face across a solid: continuous contact with faces guards it.
     guard_ = sweep_ && hasFriction_ && settings_.collisionMethod == CollisionMethod::Faces;
+    // Friction with another solid beside a plane may carry a vertex into the plane (holdOutOfPlane).
+    holdPlanes_ = false;
+    if constexpr (Front::template kHasShape<Plane>)
+      holdPlanes_ = hasFriction_ && !std::get<std::vector<CompiledSolid<Plane, S>>>(compiled_).empty() &&
+                    solidCount() > 1 && settings_.collisionMethod != CollisionMethod::InSolve;
     if (guard_ && guardMarks_.size() != state_.x.size()) {
       xBeforeFriction_.resize(state_.x.size());
       guardMarks_.assign(state_.x.size(), 0);
@@ -463,6 +468,14 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
       });
     }, hasFriction_);
     if (guard_) guardFriction();
+    if constexpr (Front::template kHasShape<Plane>)
+      if (holdPlanes_) {
+        const S thickness = S(settings_.thickness), slack = S(constants::kSettleSlack) * thickness;
+        for (const CompiledSolid<Plane, S>& plane : std::get<std::vector<CompiledSolid<Plane, S>>>(compiled_))
+          teamFor(n, [&](Index b, Index e) {
+            holdOutOfPlane(b, e, passes_.contacts(), plane.sdf, thickness, slack, x);
+          });
+      }
     if (!(faces && settings_.propagationRings > 0 && settings_.propagationWeight > 0)) return;
     DRAPE_OMP(single)
     propagation_.beginPass();
@@ -533,6 +546,7 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
   std::exception_ptr teamError_;  ///< what a body threw inside the threads' team, rethrown after it
   bool sweep_ = false;        ///< continuous contact searches the paths this substep (a bounded solid exists)
   bool guard_ = false;        ///< and friction's moves are guarded (guardFriction)
+  bool holdPlanes_ = false;   ///< friction's moves are kept out of the planes (holdOutOfPlane)
   std::vector<Vec3<S>> xBeforeFriction_;  ///< the positions the contact passes left, for the guard
   std::vector<std::uint8_t> guardMarks_;  ///< the guard's marks, cleared as they are undone
   S travel_ = 0;              ///< the substep's farthest vertex travel (shared by the team)

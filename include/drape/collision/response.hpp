@@ -1364,6 +1364,23 @@ void respondContacts(Index begin, Index end, ContactBuffer<S>& contacts, Vec3<S>
   }
 }
 
+/// Position friction moves a vertex in its slots' tangent planes, toward where their solids carry it. With several
+/// slots, or a solid moving toward a plane the vertex does not touch, that can take it into the plane: a vertex
+/// pinched under a body that falls onto the floor rides it below the floor, and a pinch's slots drag it into the
+/// floor it holds (docs/design.md §4, "Friction and the planes"). This keeps the live vertices of [begin, end) at
+/// least the thickness out of one plane solid, leaving those within `slack` of it where they are (the plane's own
+/// contacts, to rounding). A plane's test is one dot product; the velocities stay as the response left them.
+template <Scalar S>
+void holdOutOfPlane(Index begin, Index end, const ContactBuffer<S>& contacts, const Sdf<Plane, S>& plane,
+                    S thickness, S slack, Vec3<S>* x) {
+  for (Index i = begin; i < end; ++i) {
+    if (!contacts.live(i)) continue;
+    Vec3<S> n;
+    const S gap = thickness - plane(x[i], n);
+    if (gap > slack) x[i] = movedAlong(x[i], gap, n);
+  }
+}
+
 /// The in-solve method's friction: position-level Coulomb friction for every contact of the current solve pass,
 /// on vertices [begin, end).
 template <Scalar S>

@@ -105,7 +105,8 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
         settle_("settle", shaders::settle),
         settlePlace_("settle", shaders::settle, "#define DRAPE_SETTLE_PLACE 1\n"),
         frictionKernel_("friction", shaders::friction),
-        restore_("restore_marked", shaders::restore_marked) {
+        restore_("restore_marked", shaders::restore_marked),
+        holdPlane_("hold_planes", shaders::hold_planes, shapeDefine<Plane>()) {
     // The three sets, colour by colour, in one buffer: set s's colour c starts at offset_[s] + colourOffsets[c].
     std::vector<layout::Constraint> constraints;
     const DistanceSet<float>* sets[3] = {&asset_->stretch, &asset_->shear, &asset_->bending};
@@ -254,6 +255,10 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
     sweep_ = settings_.continuousContact && settings_.collisionMethod != CollisionMethod::InSolve && has.bounded > 0;
     // Position friction must not carry a face across a solid: continuous contact with faces guards it.
     guard_ = sweep_ && friction_ && settings_.collisionMethod == CollisionMethod::Faces;
+    // Friction with another solid beside a plane may carry a vertex into the plane (hold_planes.comp).
+    const auto isPlane = [](const SolidPass& p) { return p.code == layout::kPlane; };
+    holdPlanes_ = friction_ && solidCount() > 1 && settings_.collisionMethod != CollisionMethod::InSolve &&
+                  std::any_of(passes_.begin(), passes_.end(), isPlane);
     if (guard_ && guardMarks_.size() != state_.x.size()) {
       guardFrom_.assign(std::vector<layout::Vertex>(state_.x.size()));
       guardMarks_.assign(std::vector<std::uint32_t>(state_.x.size(), 0u));
@@ -483,6 +488,17 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
     respond.set(layout::kNormalDamping, float(settings_.normalDamping));
     respond.dispatch(n);
     if (guard_) guardFriction();
+    if (holdPlanes_) {
+      const float thickness = float(settings_.thickness);
+      holdPlane_.set(layout::kCount, n);
+      holdPlane_.set(layout::kThickness, thickness);
+      holdPlane_.set(layout::kSlack, float(constants::kSettleSlack) * thickness);
+      for (const SolidPass& p : passes_)
+        if (p.code == layout::kPlane) {
+          setShape(holdPlane_.id(), p.field);
+          holdPlane_.dispatch(n);
+        }
+    }
     if (settings_.collisionMethod != CollisionMethod::Faces || settings_.propagationRings <= 0 ||
         !(settings_.propagationWeight > 0))
       return;
@@ -553,11 +569,12 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
   bool coupled_ = false;          ///< some solid is a dynamic body this substep
   bool sweep_ = false;            ///< continuous contact this substep (the setting, and a bounded solid)
   bool guard_ = false;            ///< and friction's moves are guarded (guardFriction)
+  bool holdPlanes_ = false;       ///< friction's moves are kept out of the planes (hold_planes.comp)
   Buffer<layout::Vertex> guardFrom_;  ///< the positions the contact passes left, for the guard
   Buffer<std::uint32_t> guardMarks_;  ///< the guard's marks, cleared as they are undone
   BodyCoupling coupling_;  ///< the coupling's kernels, and its buffers once a scene has a dynamic solid
   Program predict_, solve_, update_, respond_, respondFriction_, propagate_, centre_, translate_, pinKernel_, settle_,
-      settlePlace_, frictionKernel_, restore_;
+      settlePlace_, frictionKernel_, restore_, holdPlane_;
   Buffer<layout::PinSlot> pinSlots_;
   Buffer<float> pinLambdas_;
   Buffer<std::array<std::uint32_t, 4>> faces_;  ///< the faces, colour by colour (colourFaces)
