@@ -461,21 +461,20 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     const SimdLevel level = simdLevelFor<S>(bestSimdLevel());
     const Index n = vertexCount();
     if (guard_) teamFor(n, [&](Index b, Index e) { std::copy(x + b, x + e, xBeforeFriction_.data() + b); });
-    withFlags([&](auto friction) {
-      teamFor((n + 7) / 8, [&](Index b, Index e) {
-        respondContacts<friction()>(8 * b, std::min(8 * e, n), passes_.contacts(), x, xPrev_.data(), v, h, damping,
-                                    level);
-      });
-    }, hasFriction_);
-    if (guard_) guardFriction();
+    PlaneHold<S> hold;
     if constexpr (Front::template kHasShape<Plane>)
       if (holdPlanes_) {
-        const S thickness = S(settings_.thickness), slack = S(constants::kSettleSlack) * thickness;
-        for (const CompiledSolid<Plane, S>& plane : std::get<std::vector<CompiledSolid<Plane, S>>>(compiled_))
-          teamFor(n, [&](Index b, Index e) {
-            holdOutOfPlane(b, e, passes_.contacts(), plane.sdf, thickness, slack, x);
-          });
+        const auto& planes = std::get<std::vector<CompiledSolid<Plane, S>>>(compiled_);
+        hold = {planes.data(), planes.size(), S(settings_.thickness),
+                S(constants::kSettleSlack) * S(settings_.thickness)};
       }
+    withFlags([&](auto friction, auto holdPlanes) {
+      teamFor((n + 7) / 8, [&](Index b, Index e) {
+        respondContacts<friction(), S, holdPlanes()>(8 * b, std::min(8 * e, n), passes_.contacts(), x, xPrev_.data(),
+                                                     v, h, damping, level, hold);
+      });
+    }, hasFriction_, holdPlanes_);
+    if (guard_) guardFriction();
     if (!(faces && settings_.propagationRings > 0 && settings_.propagationWeight > 0)) return;
     DRAPE_OMP(single)
     propagation_.beginPass();

@@ -1284,6 +1284,35 @@ DRAPE_TARGET_AVX2 inline void respondEight(Index i, ContactBuffer<float>& contac
 }  // namespace detail
 #endif
 
+/// The planes the response keeps its vertices out of (docs/design.md §4, "Friction and the planes"): position
+/// friction moves a vertex in its slots' tangent planes, toward where their solids carry it, after every contact
+/// pass. With several slots, or a solid moving toward a plane the vertex does not touch, that can take it into the
+/// plane: a vertex pinched under a body that falls onto the floor rides it below the floor. Each vertex goes back
+/// to at least the thickness out of each plane; those within `slack` of it (the plane's own contacts, to rounding)
+/// stay where they are.
+template <Scalar S> struct PlaneHold {
+  const CompiledSolid<Plane, S>* planes = nullptr;
+  std::size_t count = 0;
+  S thickness = 0, slack = 0;
+};
+
+/// One vertex out of one plane (PlaneHold); a plane's test is one dot product.
+template <Scalar S>
+DRAPE_ALWAYS_INLINE void holdOutOfPlane(Vec3<S>& x, const Sdf<Plane, S>& plane, S thickness, S slack) {
+  Vec3<S> n;
+  const S gap = thickness - plane(x, n);
+  if (gap > slack) x = movedAlong(x, gap, n);
+}
+
+/// The contact vertices of [begin, end) out of one plane (the GPU's hold_planes.comp; respondContacts does the
+/// same vertex by vertex).
+template <Scalar S>
+void holdOutOfPlane(Index begin, Index end, const ContactBuffer<S>& contacts, const Sdf<Plane, S>& plane,
+                    S thickness, S slack, Vec3<S>* x) {
+  for (Index i = begin; i < end; ++i)
+    if (contacts.live(i)) holdOutOfPlane(x[i], plane, thickness, slack);
+}
+
 /// The velocity split of the SDF collision paper (Fig 3) for every contact vertex of [begin, end) and each surface it
 /// touches, relative to that solid: the approaching normal velocity is removed, a separating one is damped by
 /// normalDamping, the tangential velocity is kept minus Coulomb friction. Friction acts on positions
@@ -1291,11 +1320,19 @@ DRAPE_TARGET_AVX2 inline void respondEight(Index i, ContactBuffer<float>& contac
 /// of its tangential speed, the same as its position lost, so a slip never carries on as velocity what friction took
 /// from the position (that mismatch makes a stuck cloth crawl downhill in stick-slip waves). kFriction false (no solid
 /// of the scene has friction) compiles the friction out. `level` (simdLevelFor) lets float take eight or four
-/// contact vertices at a time in SIMD lanes, with the same bits; Scalar keeps to the loop.
-template <bool kFriction, Scalar S>
+/// contact vertices at a time in SIMD lanes, with the same bits; Scalar keeps to the loop. With kHold each
+/// contact vertex then goes out of `hold`'s planes (PlaneHold).
+template <bool kFriction, Scalar S, bool kHold = false>
 void respondContacts(Index begin, Index end, ContactBuffer<S>& contacts, Vec3<S>* x, const Vec3<S>* xPrev,
-                     Vec3<S>* v, S h, S normalDamping, SimdLevel level = SimdLevel::Scalar) {
+                     Vec3<S>* v, S h, S normalDamping, SimdLevel level = SimdLevel::Scalar,
+                     const PlaneHold<S>& hold = {}) {
   const S invH = S(1) / h;
+  const auto holdOut = [&](Index first, Index count) {
+    if constexpr (kHold)
+      for (std::size_t p = 0; p < hold.count; ++p)
+        for (Index j = first; j < first + count; ++j)
+          holdOutOfPlane(x[j], hold.planes[p].sdf, hold.thickness, hold.slack);
+  };
   for (Index i = begin; i < end; ++i) {
 #if DRAPE_SSE2
     if constexpr (std::is_same_v<S, float>) {
@@ -1310,12 +1347,14 @@ void respondContacts(Index begin, Index end, ContactBuffer<S>& contacts, Vec3<S>
 #if DRAPE_AVX2
       if (level == SimdLevel::Avx2 && oneSurface(i, 8)) {
         detail::respondEight<kFriction>(i, contacts, x, xPrev, v, h, invH, normalDamping);
+        holdOut(i, 8);
         i += 7;
         continue;
       }
 #endif
       if (level != SimdLevel::Scalar && oneSurface(i, 4)) {
         detail::respondFour<kFriction>(i, contacts, x, xPrev, v, h, invH, normalDamping);
+        holdOut(i, 4);
         i += 3;
         continue;
       }
@@ -1361,23 +1400,7 @@ void respondContacts(Index begin, Index end, ContactBuffer<S>& contacts, Vec3<S>
       v[i] = nearestInHalfSpaces(normals, bounds, count, v[i], v[i], v[i].norm());
     }
     contacts.normalDv[i] = dvnSum;
-  }
-}
-
-/// Position friction moves a vertex in its slots' tangent planes, toward where their solids carry it. With several
-/// slots, or a solid moving toward a plane the vertex does not touch, that can take it into the plane: a vertex
-/// pinched under a body that falls onto the floor rides it below the floor, and a pinch's slots drag it into the
-/// floor it holds (docs/design.md §4, "Friction and the planes"). This keeps the live vertices of [begin, end) at
-/// least the thickness out of one plane solid, leaving those within `slack` of it where they are (the plane's own
-/// contacts, to rounding). A plane's test is one dot product; the velocities stay as the response left them.
-template <Scalar S>
-void holdOutOfPlane(Index begin, Index end, const ContactBuffer<S>& contacts, const Sdf<Plane, S>& plane,
-                    S thickness, S slack, Vec3<S>* x) {
-  for (Index i = begin; i < end; ++i) {
-    if (!contacts.live(i)) continue;
-    Vec3<S> n;
-    const S gap = thickness - plane(x[i], n);
-    if (gap > slack) x[i] = movedAlong(x[i], gap, n);
+    holdOut(i, 1);
   }
 }
 

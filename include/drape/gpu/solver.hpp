@@ -487,7 +487,6 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
     respond.set(layout::kInverseStep, 1.0f / h);
     respond.set(layout::kNormalDamping, float(settings_.normalDamping));
     respond.dispatch(n);
-    if (guard_) guardFriction();
     if (holdPlanes_) {
       const float thickness = float(settings_.thickness);
       holdPlane_.set(layout::kCount, n);
@@ -499,6 +498,7 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
           holdPlane_.dispatch(n);
         }
     }
+    if (guard_) guardFriction();  // after the hold, as on the CPU (respondContacts holds each vertex)
     if (settings_.collisionMethod != CollisionMethod::Faces || settings_.propagationRings <= 0 ||
         !(settings_.propagationWeight > 0))
       return;
