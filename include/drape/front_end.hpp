@@ -42,6 +42,7 @@ struct SolidFeatures {
   bool repulsion = false;  ///< some solid has a repulsion region
   bool reconcile = false;  ///< a vertex may touch several surfaces (several solids, or a curved one)
   bool coupled = false;    ///< some solid is a dynamic body
+  bool moving = false;     ///< some solid is kinematic or dynamic
   int bounded = 0;         ///< solids with a bounding box (every shape but the plane)
 };
 
@@ -346,6 +347,7 @@ template <class Backend, Scalar S, class... Shapes> class SolverFront {
                   has.friction = has.friction || held.staticFriction > 0 || held.dynamicFriction > 0;
                   has.repulsion = has.repulsion || held.repulsion.radius > 0;
                   has.reconcile = has.reconcile || !Sdf<Shape, S>::kLinear;
+                  has.moving = has.moving || held.motion != Motion::Static;
                   detail::advancePose(held, h);
                   detail::recompileSolid<Shape, S>(out[k], held, state_.origin);
                   has.bounded += out[k].bounded ? 1 : 0;

@@ -136,10 +136,10 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     sweep_ = settings_.continuousContact && settings_.collisionMethod != CollisionMethod::InSolve && has.bounded > 0;
     // Position friction must not carry a face across a solid: continuous contact with faces guards it.
     guard_ = sweep_ && hasFriction_ && settings_.collisionMethod == CollisionMethod::Faces;
-    // Friction with another solid beside a plane may carry a vertex into the plane (holdOutOfPlane).
+    // Friction and pushes of a moving solid beside a plane may carry a vertex into the plane (holdOutOfPlane).
     holdPlanes_ = false;
     if constexpr (Front::template kHasShape<Plane>)
-      holdPlanes_ = hasFriction_ && !std::get<std::vector<CompiledSolid<Plane, S>>>(compiled_).empty() &&
+      holdPlanes_ = hasFriction_ && has.moving && !std::get<std::vector<CompiledSolid<Plane, S>>>(compiled_).empty() &&
                     solidCount() > 1 && settings_.collisionMethod != CollisionMethod::InSolve;
     if (guard_ && guardMarks_.size() != state_.x.size()) {
       xBeforeFriction_.resize(state_.x.size());

@@ -239,24 +239,25 @@ TEST_CASE("respond: the GPU split of several surfaces against respondContacts", 
   CHECK(worstDv <= 1e-5);
 }
 
-TEST_CASE("hold planes: the GPU keeps contact vertices out of a plane as holdOutOfPlane does", "[gpu]") {
+TEST_CASE("hold planes: the GPU keeps friction's moves out of a plane as holdOutOfPlane does", "[gpu]") {
   // Random records (every fifth vertex with none, which stays where it is) about a tilted plane whose thickness
-  // holds about half of them; some sit within the slack of it and stay too.
+  // holds about half of them, each with a position ahead of the response 3 mm from its own: some were shallower
+  // and go back to it, to the thickness or to the surface, some deeper and stay.
   drape::test::gpuContext().makeCurrent();
   const int n = 3000;
   RandomContacts r(n, 13);
   for (int i = 0; i < n; i += 5) r.cpu.stamp[std::size_t(i)] = 0, r.gpu[std::size_t(i)].slots[0] = 0;
-  for (int i = 3; i < n; i += 50) r.x[std::size_t(i)].z() += 0.02f;  // moved nearer to the plane's thickness
   drape::Sdf<drape::Plane, float> plane;
   plane.normal = Vec3<float>(0.2f, -0.3f, 0.9f).normalized();
-  plane.offset = -0.01f;
-  const float thickness = 0.05f, slack = 1e-3f;
+  plane.offset = 0.03f;  // some records lie below the surface
+  const float thickness = 0.05f, slack = 1e-4f;
   std::vector<Vec3<float>> x = r.x;
-  drape::holdOutOfPlane(0, n, r.cpu, plane, thickness, slack, x.data());
+  drape::holdOutOfPlane(0, n, r.cpu, plane, thickness, slack, x.data(), r.reference.data());
 
-  drape::gpu::Buffer<layout::Vertex> gx(packed(r.x, 0.5f));
+  drape::gpu::Buffer<layout::Vertex> gx(packed(r.x, 0.5f)), gb(packed(r.reference, 1.0f));
   drape::gpu::Buffer<layout::Contact> gc(r.gpu);
   gx.bind(layout::kPositions);
+  gb.bind(layout::kGuardFrom);
   gc.bind(layout::kContacts);
   drape::gpu::Program k("hold_planes", drape::gpu::shaders::hold_planes, drape::gpu::shapeDefine<drape::Plane>());
   drape::gpu::setShape(k.id(), drape::gpu::packShape(plane));
@@ -271,13 +272,12 @@ TEST_CASE("hold planes: the GPU keeps contact vertices out of a plane as holdOut
   for (int i = 0; i < n; ++i) {
     const std::size_t u = std::size_t(i);
     Vec3<float> g;
-    const float phi = plane(r.x[u], g);
     if (x[u] != r.x[u]) ++moved;
-    else if (phi < thickness) ++left;  // a vertex without records, or within the slack
+    else if (plane(r.x[u], g) < thickness) ++left;  // no records, or deeper before the response
   }
   INFO(moved << " moved, " << left << " inside the thickness left alone");
-  REQUIRE(moved > 500);
-  REQUIRE(left > 200);
+  REQUIRE(moved > 300);
+  REQUIRE(left > 300);
   CHECK(drape::test::largestDifference(gpuX, x) <= 1e-7);  // fused multiply-adds may round one way on the CPU
   bool weightsKept = true;
   for (const layout::Vertex& p : read) weightsKept = weightsKept && p.w == 0.5f;
@@ -572,8 +572,8 @@ TEST_CASE("a box pressed edge first onto a cloth on the floor: the GPU keeps fri
           "[gpu]") {
   // The CPU's "[contacts][friction]" scene on the GPU solver: a long box turned 30 degrees about its length comes
   // down edge first at 1 m/s onto a cloth on the floor and stops with its edge 2 mm above it. Its sloping sides'
-  // position friction carried the cloth beside the edge below the floor's surface (hold_planes.comp keeps it out);
-  // read at the frames' ends.
+  // position friction and pushes carried the cloth beside the edge below the floor's surface (hold_planes.comp keeps
+  // it out); read at the frames' ends.
   drape::SheetDesc grid;
   grid.nx = grid.ny = 20;
   grid.spacing = 0.02;
@@ -606,5 +606,5 @@ TEST_CASE("a box pressed edge first onto a cloth on the floor: the GPU keeps fri
     gpu.setSolid(k, box);
   }
   INFO("lowest vertex at a frame's end " << lowest * 1e3 << " mm");
-  CHECK(lowest >= 0.999 * thickness);
+  CHECK(lowest >= -1e-4 * thickness);  // a vertex within kSettleSlack of where the hold puts it stays
 }

@@ -1284,23 +1284,25 @@ DRAPE_TARGET_AVX2 inline void respondEight(Index i, ContactBuffer<float>& contac
 }  // namespace detail
 #endif
 
-/// The planes the response keeps its vertices out of (docs/design.md §4, "Friction and the planes"): position
+/// The planes the response keeps friction's moves out of (docs/design.md §4, "Friction and the planes"): position
 /// friction moves a vertex in its slots' tangent planes, toward where their solids carry it, after every contact
 /// pass. With several slots, or a solid moving toward a plane the vertex does not touch, that can take it into the
-/// plane: a vertex pinched under a body that falls onto the floor rides it below the floor. Each vertex goes back
-/// to at least the thickness out of each plane; those within `slack` of it (the plane's own contacts, to rounding)
-/// stay where they are.
+/// plane: a vertex pinched under a body that falls onto the floor rides it below the floor. A vertex friction took
+/// deeper into a plane than the thickness and than the contact passes left it goes back to the shallower of the two
+/// (a pinch's compromise inside the thickness stays where the settle put it), and none stays below a plane's
+/// surface, where a solid's push may leave it; one within `slack` of where it goes stays.
 template <Scalar S> struct PlaneHold {
   const CompiledSolid<Plane, S>* planes = nullptr;
   std::size_t count = 0;
   S thickness = 0, slack = 0;
 };
 
-/// One vertex out of one plane (PlaneHold); a plane's test is one dot product.
+/// One vertex, at `before` ahead of the response and at x after it, out of one plane (PlaneHold); two dot products.
 template <Scalar S>
-DRAPE_ALWAYS_INLINE void holdOutOfPlane(Vec3<S>& x, const Sdf<Plane, S>& plane, S thickness, S slack) {
+DRAPE_ALWAYS_INLINE void holdOutOfPlane(Vec3<S>& x, const Vec3<S>& before, const Sdf<Plane, S>& plane, S thickness,
+                                        S slack) {
   Vec3<S> n;
-  const S gap = thickness - plane(x, n);
+  const S gap = std::min(thickness, std::max(plane(before, n), S(0))) - plane(x, n);
   if (gap > slack) x = movedAlong(x, gap, n);
 }
 
@@ -1308,9 +1310,9 @@ DRAPE_ALWAYS_INLINE void holdOutOfPlane(Vec3<S>& x, const Sdf<Plane, S>& plane, 
 /// same vertex by vertex).
 template <Scalar S>
 void holdOutOfPlane(Index begin, Index end, const ContactBuffer<S>& contacts, const Sdf<Plane, S>& plane,
-                    S thickness, S slack, Vec3<S>* x) {
+                    S thickness, S slack, Vec3<S>* x, const Vec3<S>* before) {
   for (Index i = begin; i < end; ++i)
-    if (contacts.live(i)) holdOutOfPlane(x[i], plane, thickness, slack);
+    if (contacts.live(i)) holdOutOfPlane(x[i], before[i], plane, thickness, slack);
 }
 
 /// The velocity split of the SDF collision paper (Fig 3) for every contact vertex of [begin, end) and each surface it
@@ -1327,11 +1329,15 @@ void respondContacts(Index begin, Index end, ContactBuffer<S>& contacts, Vec3<S>
                      Vec3<S>* v, S h, S normalDamping, SimdLevel level = SimdLevel::Scalar,
                      const PlaneHold<S>& hold = {}) {
   const S invH = S(1) / h;
+  Vec3<S> before[8];  // with kHold, the positions of the vertices in hand ahead of the response
+  const auto keepBefore = [&](Index first, Index count) {
+    if constexpr (kHold) std::copy(x + first, x + first + count, before);
+  };
   const auto holdOut = [&](Index first, Index count) {
     if constexpr (kHold)
       for (std::size_t p = 0; p < hold.count; ++p)
-        for (Index j = first; j < first + count; ++j)
-          holdOutOfPlane(x[j], hold.planes[p].sdf, hold.thickness, hold.slack);
+        for (Index j = 0; j < count; ++j)
+          holdOutOfPlane(x[first + j], before[j], hold.planes[p].sdf, hold.thickness, hold.slack);
   };
   for (Index i = begin; i < end; ++i) {
 #if DRAPE_SSE2
@@ -1346,6 +1352,7 @@ void respondContacts(Index begin, Index end, ContactBuffer<S>& contacts, Vec3<S>
       };
 #if DRAPE_AVX2
       if (level == SimdLevel::Avx2 && oneSurface(i, 8)) {
+        keepBefore(i, 8);
         detail::respondEight<kFriction>(i, contacts, x, xPrev, v, h, invH, normalDamping);
         holdOut(i, 8);
         i += 7;
@@ -1353,6 +1360,7 @@ void respondContacts(Index begin, Index end, ContactBuffer<S>& contacts, Vec3<S>
       }
 #endif
       if (level != SimdLevel::Scalar && oneSurface(i, 4)) {
+        keepBefore(i, 4);
         detail::respondFour<kFriction>(i, contacts, x, xPrev, v, h, invH, normalDamping);
         holdOut(i, 4);
         i += 3;
@@ -1361,6 +1369,7 @@ void respondContacts(Index begin, Index end, ContactBuffer<S>& contacts, Vec3<S>
     }
 #endif
     if (!contacts.live(i)) continue;
+    keepBefore(i, 1);
     S dvnSum = 0;
     for (int k = 0; k < contacts.slotCount[i]; ++k) {
       const ContactSlot<S>& c = contacts.slots[i][k];

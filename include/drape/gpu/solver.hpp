@@ -255,14 +255,15 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
     sweep_ = settings_.continuousContact && settings_.collisionMethod != CollisionMethod::InSolve && has.bounded > 0;
     // Position friction must not carry a face across a solid: continuous contact with faces guards it.
     guard_ = sweep_ && friction_ && settings_.collisionMethod == CollisionMethod::Faces;
-    // Friction with another solid beside a plane may carry a vertex into the plane (hold_planes.comp).
+    // Friction and pushes of a moving solid beside a plane may carry a vertex into the plane (hold_planes.comp).
     const auto isPlane = [](const SolidPass& p) { return p.code == layout::kPlane; };
-    holdPlanes_ = friction_ && solidCount() > 1 && settings_.collisionMethod != CollisionMethod::InSolve &&
+    holdPlanes_ = friction_ && has.moving && solidCount() > 1 &&
+                  settings_.collisionMethod != CollisionMethod::InSolve &&
                   std::any_of(passes_.begin(), passes_.end(), isPlane);
-    if (guard_ && guardMarks_.size() != state_.x.size()) {
+    if ((guard_ || holdPlanes_) && guardFrom_.size() != state_.x.size())
       guardFrom_.assign(std::vector<layout::Vertex>(state_.x.size()));
+    if (guard_ && guardMarks_.size() != state_.x.size())
       guardMarks_.assign(std::vector<std::uint32_t>(state_.x.size(), 0u));
-    }
     if (coupled_) coupling_.reserve(state_.x.size(), bodies_.size());  // the coupling's buffers, once it has a body
   }
 
@@ -480,7 +481,7 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
   /// The velocity split, then propagation (collide's second half).
   void respondAndPropagate(float h) {
     const auto n = unsigned(vertexCount());
-    if (guard_) copyVertices(positions_, guardFrom_);
+    if (guard_ || holdPlanes_) copyVertices(positions_, guardFrom_);  // where the contact passes left them
     const Program& respond = friction_ ? respondFriction_ : respond_;
     respond.set(layout::kCount, n);
     respond.set(layout::kStep, h);
@@ -492,6 +493,7 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
       holdPlane_.set(layout::kCount, n);
       holdPlane_.set(layout::kThickness, thickness);
       holdPlane_.set(layout::kSlack, float(constants::kSettleSlack) * thickness);
+      guardFrom_.bind(layout::kGuardFrom);
       for (const SolidPass& p : passes_)
         if (p.code == layout::kPlane) {
           setShape(holdPlane_.id(), p.field);
@@ -570,7 +572,7 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
   bool sweep_ = false;            ///< continuous contact this substep (the setting, and a bounded solid)
   bool guard_ = false;            ///< and friction's moves are guarded (guardFriction)
   bool holdPlanes_ = false;       ///< friction's moves are kept out of the planes (hold_planes.comp)
-  Buffer<layout::Vertex> guardFrom_;  ///< the positions the contact passes left, for the guard
+  Buffer<layout::Vertex> guardFrom_;  ///< the positions the contact passes left, for the guard and the hold
   Buffer<std::uint32_t> guardMarks_;  ///< the guard's marks, cleared as they are undone
   BodyCoupling coupling_;  ///< the coupling's kernels, and its buffers once a scene has a dynamic solid
   Program predict_, solve_, update_, respond_, respondFriction_, propagate_, centre_, translate_, pinKernel_, settle_,
