@@ -117,6 +117,43 @@ struct BallOnBox {
   }
 };
 
+/// A body dropped onto a cloth whose every vertex is pinned (a 21 x 21 sheet of 2 cm at z = 0, `thickness`
+/// 5 mm): no vertex can move, so nothing but the anchors' supports holds the body up (coupling/anchors.hpp). The
+/// body lands off centre at 1 m/s, 2 cm above its contact shell, coupled with friction 0.3 to `world` (gravity, no
+/// ground). `box` drops a 6 x 4 x 2 cm box turned 0.3 rad about z; else a ball of radius 5 cm.
+struct OnAnchors {
+  static constexpr double thickness = 0.005;
+  int body = -1;
+  double bottomBelowCentre = 0;  ///< the body's lowest point under its centre while level
+  static SheetDesc sheet() {
+    SheetDesc grid;
+    grid.nx = grid.ny = 21;
+    grid.spacing = 0.02;
+    return grid;
+  }
+  template <class Cloth> OnAnchors(Cloth& cloth, RigidWorld& world, bool box) {
+    for (Index i = 0; i < cloth.vertexCount(); ++i) cloth.pin(i);
+    BodyDesc d;
+    if (box) {
+      d.shape = Box{Eigen::Vector3d(0.03, 0.02, 0.01)};
+      d.pose.rotation = Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ());
+      bottomBelowCentre = 0.01;
+    } else {
+      d.shape = Sphere{0.05};
+      bottomBelowCentre = 0.05;
+    }
+    d.pose.position = {0.013, -0.007, bottomBelowCentre + thickness + 0.02};
+    d.linearVelocity = {0, 0, -1};
+    d.density = 300;
+    body = world.add(d);
+    CouplingDesc coupling;
+    coupling.staticFriction = coupling.dynamicFriction = 0.3;
+    addCoupledBody(cloth, world, body, coupling);
+  }
+  /// The body's lowest point over the sheet (the anchors' plane), taken as if level.
+  double gap(const RigidWorld& world) const { return world.body(body).pose().position.z() - bottomBelowCentre; }
+};
+
 /// Gravity and no ground: the cloth alone holds what falls on it.
 inline RigidSettings noGround() {
   RigidSettings rigid;

@@ -7,6 +7,7 @@
 #include <Eigen/Eigenvalues>
 #include <catch2/catch.hpp>
 
+#include "edge_press.hpp"
 #include "heavy_brick.hpp"
 
 #include <algorithm>
@@ -347,36 +348,14 @@ TEMPLATE_TEST_CASE("a solid pressed edge first onto a cloth on the floor does no
   const double thickness = drape::Settings{}.thickness;
   for (const double tilt : {30.0, 45.0})
     for (const double gap : {0.002, 0.008}) {
-      drape::SheetDesc grid;
-      grid.nx = grid.ny = 20;
-      grid.spacing = 0.02;
-      grid.placement.position = {0, 0, thickness};
-      drape::Solver<S> cloth(std::make_shared<const drape::ClothAsset<S>>(drape::ClothAsset<S>::sheet(grid)));
-      drape::Solid<drape::Plane> floor;
-      floor.staticFriction = floor.dynamicFriction = 0.5;
-      cloth.addSolid(floor);
-      drape::Solid<drape::Box> box;
-      box.shape.halfExtents = {0.3, 0.05, 0.05};
-      box.motion = drape::Motion::Kinematic;
-      box.staticFriction = box.dynamicFriction = 0.3;
-      const double a = tilt * std::numbers::pi / 180, speed = 1, dt = 1.0 / 60;
-      box.pose.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(a, Eigen::Vector3d::UnitX()));
-      const double low = 0.05 * (std::cos(a) + std::sin(a));  // from the box's centre down to its lowest edge
-      box.pose.position = {0, 0, 0.1 + low};
-      box.linearVelocity = {0, 0, -speed};
-      const drape::Index k = cloth.addSolid(box);
+      drape::Solver<S> cloth(std::make_shared<const drape::ClothAsset<S>>(
+          drape::ClothAsset<S>::sheet(drape::scenes::edgePressSheet(thickness))));
       double lowest = thickness;
-      for (int f = 0; f < 60; ++f) {
-        cloth.step(dt, [&](const drape::Solver<S>& s) {
+      drape::scenes::pressEdgeFirst(cloth, tilt * std::numbers::pi / 180, gap, [&](drape::Solver<S>& c, double dt) {
+        c.step(dt, [&](const drape::Solver<S>& s) {
           for (drape::Index i = 0; i < s.vertexCount(); ++i) lowest = std::min(lowest, s.position(i).z());
         });
-        box.pose.position.z() -= speed * dt;
-        if (box.pose.position.z() - low <= gap) {
-          box.pose.position.z() = gap + low;
-          box.linearVelocity.setZero();
-        }
-        cloth.setSolid(k, box);
-      }
+      });
       INFO("tilt " << tilt << " degrees, the edge stopping " << gap * 1e3 << " mm above the floor: lowest vertex "
                    << lowest * 1e3 << " mm");
       CHECK(lowest >= -1e-4 * thickness);  // a vertex within kSettleSlack of where the hold puts it stays

@@ -7,6 +7,7 @@
 
 #include <drape/cloth/asset.hpp>
 #include <drape/cloth/state.hpp>
+#include <drape/coupling/anchors.hpp>
 #include <drape/sdf/solid.hpp>
 #include <drape/settings.hpp>
 
@@ -112,6 +113,7 @@ template <class Backend, Scalar S, class... Shapes> class SolverFront {
     state_.origin = origin;
     for (std::size_t i = 0; i < world.size(); ++i) state_.x[i] = (world[i] - origin).template cast<S>();
     backend().storeState(StateChange::Positions);
+    anchorsStale_ = true;
   }
   /// Replaces all velocities (m/s), with the same checks.
   void setVelocities(const std::vector<Eigen::Vector3d>& v) {
@@ -139,6 +141,7 @@ template <class Backend, Scalar S, class... Shapes> class SolverFront {
     state_.invMass[std::size_t(i)] = S(invMass);
     if (invMass == 0) state_.v[std::size_t(i)].setZero();
     backend().storeState(StateChange::Masses);
+    anchorsStale_ = true;
   }
   /// Fixes a vertex where it is (inverse mass 0).
   void pin(Index i) { setInverseMass(i, 0); }
@@ -148,12 +151,15 @@ template <class Backend, Scalar S, class... Shapes> class SolverFront {
     checkVertex(i);
     detail::require(detail::allFinite(target), [&] { return "pin target of vertex " + std::to_string(i) + " is not finite"; });
     pins_.push_back({i, target});
+    anchorsStale_ = true;
     return Index(pins_.size()) - 1;
   }
   void setPinTarget(Index pin, const Eigen::Vector3d& target) {
     detail::require(pin >= 0 && pin < Index(pins_.size()), [&] { return "pin index " + std::to_string(pin) + " out of range"; });
     detail::require(detail::allFinite(target), "pin target is not finite");
     pins_[std::size_t(pin)].target = target;
+    for (coupling::Anchor& a : anchors_)  // an attached vertex of inverse mass 0 follows its target
+      if (a.vertex == pins_[std::size_t(pin)].vertex) a.world = target;
   }
   const std::vector<Pin>& pins() const { return pins_; }
 
@@ -220,6 +226,7 @@ template <class Backend, Scalar S, class... Shapes> class SolverFront {
              detail::formatNumber(dt / settings_.subStepCount) + ")";
     });
     const double h = dt / settings_.subStepCount;
+    if (anchorsStale_) listAnchors();
     auto run = [&] {
       backend().beginStep();
       for (int sub = 0; sub < settings_.subStepCount; ++sub) {
@@ -261,11 +268,38 @@ template <class Backend, Scalar S, class... Shapes> class SolverFront {
   const std::vector<Eigen::Vector3d>& bodyTorques() const { return bodyTorque_; }
   /// The coupled bodies of the last substep, in the same order.
   const std::vector<CoupledBody*>& coupledBodies() const { return bodies_; }
-  /// The cloth's pinches in the last substep, in vertex order: what holds each pinched body off the surface
-  /// behind the cloth (stepCoupled hands them to the rigid world).
+  /// The cloth's pinches in the last substep, in vertex order, then its anchors' (vertices of inverse mass 0 in a
+  /// body's contact shell): what holds each pinched body off the surface behind the cloth, or off the anchor
+  /// (stepCoupled hands them to the rigid world).
   const std::vector<Spacer>& spacers() const { return spacers_; }
 
  protected:
+  /// The vertices of inverse mass 0 and where they are (an attached one at its pin's target), after a program
+  /// changed positions, masses or pins: read once, not every substep.
+  void listAnchors() {
+    backend().loadState();
+    anchors_.clear();
+    for (std::size_t i = 0; i < state_.invMass.size(); ++i)
+      if (state_.invMass[i] == S(0))
+        anchors_.push_back({Index(i), state_.origin + state_.x[i].template cast<double>()});
+    for (const Pin& p : pins_)
+      for (coupling::Anchor& a : anchors_)
+        if (a.vertex == p.vertex) a.world = p.target;
+    anchorsStale_ = false;
+  }
+  /// Each anchor's support of the coupled bodies whose contact shells hold it (coupling::supportAnchors): added to
+  /// `sums`, one per coupled body, and its spacers appended to `spacers` (the cloth's local frame).
+  void supportAnchors(double h, std::vector<coupling::BodySums>& sums, std::vector<Spacer>& spacers) {
+    if (anchors_.empty()) return;
+    std::apply(
+        [&](const auto&... lists) {
+          (coupling::supportAnchors(lists, anchors_, bodies_, bodyCentre_, state_.origin, h, settings_.thickness,
+                                    settings_.normalForceOnly, sums, spacers),
+           ...);
+        },
+        compiled_);
+  }
+
   /// Moves the spacers' points from the cloth's local frame into their bodies' frames where the cloth met them
   /// (a fixed solid's into the world's).
   void spacersToBodyFrames() {
@@ -376,6 +410,8 @@ template <class Backend, Scalar S, class... Shapes> class SolverFront {
   /// Their fields, compiled at the last substep's pose (recompileSolid keeps a hull's query data and a grid).
   std::tuple<std::vector<CompiledSolid<Shapes, S>>...> compiled_;
   std::vector<Pin> pins_;
+  std::vector<coupling::Anchor> anchors_;  ///< the vertices of inverse mass 0 (listAnchors)
+  bool anchorsStale_ = true;
   std::vector<CoupledBody*> bodies_;  ///< the dynamic solids' bodies, this substep
   /// Their centres of mass where the substep's contacts were found (advancePose: the start, carried by the
   /// velocity over the substep); torques are taken about them, so a force along a field's normal through a

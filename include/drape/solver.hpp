@@ -389,7 +389,8 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
   }
 
   /// Phase 2 (docs/design.md §6): the cloth's pushes on the coupled bodies (coupling/contact_forces.hpp), each
-  /// body's exchange shared with the vertices that made it (coupling/share.hpp), then the pinches' supports.
+  /// body's exchange shared with the vertices that made it (coupling/share.hpp), then the pinches' and the
+  /// anchors' supports (coupling/anchors.hpp).
   void gatherContactForces(S h, S thickness) {
     const coupling::SubstepView<S> view{passes_.contacts(),
                                         state_,
@@ -406,6 +407,7 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
                                         coupling::passesPropagatedImpulse(settings_)};
     coupling::Gathered out{bodyForce_, bodyTorque_, bodySums_, exchanged_, this->spacers_};
     coupling::gatherContactForces(view, out);
+    this->supportAnchors(double(h), bodySums_, this->spacers_);
     this->spacersToBodyFrames();
     coupling::shareExchanges(bodies_, bodySums_, exchanged_, bodyForce_, bodyTorque_, state_.v.data(), vPre_.data());
     coupling::addPinches(bodySums_, bodyForce_, bodyTorque_);

@@ -232,6 +232,36 @@ TEST_CASE("coupling on the GPU: a box resting on a cloth on the ground gets its 
   CHECK(fastest < 0.05);
 }
 
+TEST_CASE("coupling on the GPU: a body dropped onto a cloth's pinned vertices rests on them", "[gpu]") {
+  // The CPU test's scene and bounds: the anchors' supports, computed on the host, join the GPU's pinches. Without
+  // them the bodies fell through the sheet.
+  for (const bool box : {false, true}) {
+    drape::Settings settings;
+    settings.thickness = drape::test::OnAnchors::thickness;
+    drape::gpu::Solver cloth(drape::test::gpuContext(),
+                             std::make_shared<const drape::ClothAsset<float>>(
+                                 drape::ClothAsset<float>::sheet(drape::test::OnAnchors::sheet())),
+                             settings, 0.1);
+    drape::RigidWorld world(drape::test::noGround());
+    const drape::test::OnAnchors scene(cloth, world, box);
+    double lowest = 1, deepest = 0;
+    const auto lowestGap = [&](const drape::gpu::Solver&) { lowest = std::min(lowest, scene.gap(world)); };
+    for (int s = 0; s < 200; ++s) {
+      drape::stepCoupled(cloth, world, 0.01, lowestGap);
+      deepest = std::max(deepest, drape::scenes::bodyPenetrationAtBodies(cloth, world));
+    }
+    const double speed = world.body(scene.body).linearVelocity().norm();
+    const double spin = world.body(scene.body).angularVelocity().norm();
+    INFO((box ? "box" : "ball") << ": lowest gap " << lowest << " m, final gap " << scene.gap(world)
+                                << " m, deepest anchor in it " << deepest << " m, after 2 s " << speed << " m/s, "
+                                << spin << " rad/s");
+    CHECK(lowest >= (drape::constants::kSpacerGap - 1) * drape::test::OnAnchors::thickness - 0.001);
+    CHECK(deepest == 0);
+    CHECK(speed <= 1e-3);
+    CHECK(spin <= 1e-2);
+  }
+}
+
 TEST_CASE("coupling on the GPU: a ball on a cloth lying on a box, both rigid bodies, is held off the box", "[gpu]") {
   // The vertices under the ball are pinched between two bodies: the cloth holds them 2 thicknesses apart
   // (pinchSupport in contact_forces.comp, with the pair's effective mass). The CPU test's scene and bounds; with

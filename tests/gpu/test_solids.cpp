@@ -3,6 +3,7 @@
 // against its CPU twin on random records; and scenes where surfaces meet (a V gutter of two planes, a cloth
 // pinched between a ball and the floor), GPU against CPU.
 #include "gpu_helpers.hpp"
+#include "edge_press.hpp"
 #include "gutter.hpp"
 
 #include <drape/drape.hpp>
@@ -574,37 +575,15 @@ TEST_CASE("a box pressed edge first onto a cloth on the floor: the GPU keeps fri
   // down edge first at 1 m/s onto a cloth on the floor and stops with its edge 2 mm above it. Its sloping sides'
   // position friction and pushes carried the cloth beside the edge below the floor's surface (hold_planes.comp keeps
   // it out); read at the frames' ends.
-  drape::SheetDesc grid;
-  grid.nx = grid.ny = 20;
-  grid.spacing = 0.02;
   const double thickness = drape::Settings{}.thickness;
-  grid.placement.position = {0, 0, thickness};
+  const drape::SheetDesc grid = drape::scenes::edgePressSheet(thickness);
   drape::gpu::Solver gpu(drape::test::gpuContext(),
                          std::make_shared<const drape::ClothAsset<float>>(drape::ClothAsset<float>::sheet(grid)));
-  drape::Solid<drape::Plane> floor;
-  floor.staticFriction = floor.dynamicFriction = 0.5;
-  gpu.addSolid(floor);
-  drape::Solid<drape::Box> box;
-  box.shape.halfExtents = {0.3, 0.05, 0.05};
-  box.motion = drape::Motion::Kinematic;
-  box.staticFriction = box.dynamicFriction = 0.3;
-  const double a = std::numbers::pi / 6, speed = 1, dt = 1.0 / 60, gap = 0.002;
-  box.pose.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(a, Eigen::Vector3d::UnitX()));
-  const double low = 0.05 * (std::cos(a) + std::sin(a));
-  box.pose.position = {0, 0, 0.1 + low};
-  box.linearVelocity = {0, 0, -speed};
-  const drape::Index k = gpu.addSolid(box);
   double lowest = thickness;
-  for (int f = 0; f < 60; ++f) {
-    gpu.step(dt);
-    for (drape::Index i = 0; i < gpu.vertexCount(); ++i) lowest = std::min(lowest, gpu.position(i).z());
-    box.pose.position.z() -= speed * dt;
-    if (box.pose.position.z() - low <= gap) {
-      box.pose.position.z() = gap + low;
-      box.linearVelocity.setZero();
-    }
-    gpu.setSolid(k, box);
-  }
+  drape::scenes::pressEdgeFirst(gpu, std::numbers::pi / 6, 0.002, [&](drape::gpu::Solver& g, double dt) {
+    g.step(dt);
+    for (drape::Index i = 0; i < g.vertexCount(); ++i) lowest = std::min(lowest, g.position(i).z());
+  });
   INFO("lowest vertex at a frame's end " << lowest * 1e3 << " mm");
   CHECK(lowest >= -1e-4 * thickness);  // a vertex within kSettleSlack of where the hold puts it stays
 }

@@ -70,11 +70,12 @@ class BodyCoupling {
   /// shared with the vertices that made it (share.comp scales those vertices' changes where a body took less than
   /// all); the forces, added to what `force` and `torque` hold (the repulsion's), applied to the bodies before
   /// they move and left in `force` and `torque`. `centres` are the bodies' centres (world), `origin` the cloth's.
-  /// The pinches are listed in `spacers`, in the cloth's local frame, sorted by vertex and slot.
+  /// The pinches are listed in `spacers`, in the cloth's local frame, sorted by vertex and slot. `anchored` holds
+  /// each body's anchors' supports (coupling::supportAnchors), shared with its pinches'.
   void gather(const std::vector<CoupledBody*>& bodies, const std::vector<Eigen::Vector3d>& centres,
               const Eigen::Vector3d& origin, const Settings& settings, float h, unsigned vertexCount,
               std::vector<Eigen::Vector3d>& force, std::vector<Eigen::Vector3d>& torque,
-              std::vector<Spacer>& spacers) {
+              std::vector<Spacer>& spacers, const std::vector<coupling::BodySums>& anchored) {
     upload(bodies, centres, origin);
     layout::SpacerRecord header{};
     header.body = std::int32_t(spacers_.size() - 1);
@@ -103,7 +104,13 @@ class BodyCoupling {
       const double s = coupling::exchangeShare(body, ef, et, sum.exchangeForce[3]);
       Eigen::Vector3d f = force[b] + vec(sum.directForce) + s * ef;  // after the repulsion's
       Eigen::Vector3d t = torque[b] + vec(sum.directTorque) + s * et;
-      if (sum.pinchForce[3] > 0) f += vec(sum.pinchForce) / sum.pinchForce[3], t += vec(sum.pinchTorque) / sum.pinchForce[3];
+      // The pinches' supports, the GPU's and the anchors' (computed on the host), shared among them (addPinches).
+      const coupling::BodySums& a = anchored[b];
+      const double pinches = sum.pinchForce[3] + a.pinches;
+      if (pinches > 0) {
+        f += (vec(sum.pinchForce) + a.pinchForce) / pinches;
+        t += (vec(sum.pinchTorque) + a.pinchTorque) / pinches;
+      }
       body.applyForceAndTorque(f, t);
       force[b] = f;
       torque[b] = t;

@@ -379,8 +379,12 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
     }
     // 5. the cloth's push on the coupled bodies, applied before they move (docs/design.md §6)
     if (coupled_) {
+      anchorSums_.assign(bodies_.size(), coupling::BodySums{});
+      anchorSpacers_.clear();
+      supportAnchors(double(h), anchorSums_, anchorSpacers_);
       coupling_.gather(bodies_, bodyCentre_, state_.origin, settings_, h, unsigned(vertexCount()), bodyForce_,
-                       bodyTorque_, spacers_);
+                       bodyTorque_, spacers_, anchorSums_);
+      spacers_.insert(spacers_.end(), anchorSpacers_.begin(), anchorSpacers_.end());
       spacersToBodyFrames();
     }
     fresh_ = false;  // the CPU copy of the state is behind now
@@ -560,6 +564,8 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
   }
 
   Context* context_;
+  std::vector<coupling::BodySums> anchorSums_;  ///< the anchors' supports of each coupled body, this substep
+  std::vector<Spacer> anchorSpacers_;
   mutable bool fresh_ = true;  ///< the CPU copy of the state (SolverFront::state_) is current
   std::vector<SolidPass> passes_;  ///< this substep's solids (prepareSolids)
   bool friction_ = false;    ///< some solid has friction this substep
