@@ -6,6 +6,9 @@
 #include <drape/coupling/rigid_world.hpp>
 #include <drape/rigid/world.hpp>
 
+#include "rigid_rain.hpp"  // bodyPenetrationAtBodies
+
+#include <algorithm>
 #include <array>
 #include <limits>
 #include <memory>
@@ -152,6 +155,29 @@ struct OnAnchors {
   }
   /// The body's lowest point over the sheet (the anchors' plane), taken as if level.
   double gap(const RigidWorld& world) const { return world.body(body).pose().position.z() - bottomBelowCentre; }
+  /// What 2 s of coupled steps (0.01 s) did: the lowest gap at any substep's end, the deepest anchor inside the
+  /// body at any step's end, and the body's gap, speed and spin at the end.
+  struct Landing {
+    double lowest = 1, deepest = 0, finalGap = 0, speed = 0, spin = 0;
+    std::string describe() const {
+      using detail::formatNumber;
+      return "lowest gap " + formatNumber(lowest) + " m, final " + formatNumber(finalGap) +
+             " m, deepest anchor in it " + formatNumber(deepest) + " m, after 2 s " + formatNumber(speed) + " m/s, " +
+             formatNumber(spin) + " rad/s";
+    }
+  };
+  template <class Cloth> Landing land(Cloth& cloth, RigidWorld& world) const {
+    Landing r;
+    const auto watch = [&](const Cloth&) { r.lowest = std::min(r.lowest, gap(world)); };
+    for (int s = 0; s < 200; ++s) {
+      stepCoupled(cloth, world, 0.01, watch);
+      r.deepest = std::max(r.deepest, scenes::bodyPenetrationAtBodies(cloth, world));
+    }
+    r.finalGap = gap(world);
+    r.speed = world.body(body).linearVelocity().norm();
+    r.spin = world.body(body).angularVelocity().norm();
+    return r;
+  }
 };
 
 /// Gravity and no ground: the cloth alone holds what falls on it.
