@@ -14,6 +14,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace drape::test {
 
@@ -162,21 +163,37 @@ struct OnAnchors {
     std::string describe() const {
       using detail::formatNumber;
       return "lowest gap " + formatNumber(lowest) + " m, final " + formatNumber(finalGap) +
-             " m, deepest anchor in it " + formatNumber(deepest) + " m, after 2 s " + formatNumber(speed) + " m/s, " +
+             " m, deepest anchor in it " + formatNumber(deepest) + " m, at the end " + formatNumber(speed) + " m/s, " +
              formatNumber(spin) + " rad/s";
     }
   };
-  template <class Cloth> Landing land(Cloth& cloth, RigidWorld& world) const {
+  template <class Cloth> Landing land(Cloth& cloth, RigidWorld& world, int steps = 200, double plane = 0) const {
     Landing r;
-    const auto watch = [&](const Cloth&) { r.lowest = std::min(r.lowest, gap(world)); };
-    for (int s = 0; s < 200; ++s) {
+    const auto watch = [&](const Cloth&) { r.lowest = std::min(r.lowest, gap(world) - plane); };
+    for (int s = 0; s < steps; ++s) {
       stepCoupled(cloth, world, 0.01, watch);
       r.deepest = std::max(r.deepest, scenes::bodyPenetrationAtBodies(cloth, world));
     }
-    r.finalGap = gap(world);
+    r.finalGap = gap(world) - plane;
     r.speed = world.body(body).linearVelocity().norm();
     r.spin = world.body(body).angularVelocity().norm();
     return r;
+  }
+  /// Lets the body come to rest (1 s), then moves the whole sheet `drop` metres down, by new positions or, with
+  /// `attached` (every vertex attached to where it is, at inverse mass 0), by its pins' targets, and lets the body
+  /// land on it there: the landing, its gaps taken over the sheet's new plane.
+  template <class Cloth> Landing moveSheetDown(Cloth& cloth, RigidWorld& world, bool attached, double drop) const {
+    if (attached)
+      for (Index i = 0; i < cloth.vertexCount(); ++i) cloth.attach(i, cloth.position(i));
+    for (int s = 0; s < 100; ++s) stepCoupled(cloth, world, 0.01);
+    const Eigen::Vector3d down(0, 0, -drop);
+    std::vector<Eigen::Vector3d> moved(std::size_t(cloth.vertexCount()));
+    for (Index i = 0; i < cloth.vertexCount(); ++i) moved[std::size_t(i)] = cloth.position(i) + down;
+    if (attached)
+      for (Index i = 0; i < cloth.vertexCount(); ++i) cloth.setPinTarget(i, moved[std::size_t(i)]);
+    else
+      cloth.setPositions(moved);
+    return land(cloth, world, 150, -drop);
   }
 };
 

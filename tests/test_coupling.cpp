@@ -286,6 +286,30 @@ TEMPLATE_TEST_CASE("a body dropped onto a cloth's pinned vertices rests on them"
   }
 }
 
+TEMPLATE_TEST_CASE("anchors follow the program: a body rests where the pinned vertices were moved to", "[coupling]",
+                   float, double) {
+  using S = TestType;
+  // The anchors are listed when a program changes positions, masses or pins, not every substep. The ball rests on
+  // the pinned sheet, which is then moved 3 cm down, by new positions or by its pins' targets: the ball must fall
+  // and rest on it there, not stay held where the anchors were (33 mm over the sheet).
+  for (const bool attached : {false, true}) {
+    drape::Settings settings;
+    settings.thickness = drape::test::OnAnchors::thickness;
+    settings.threadCount = 1;
+    drape::Solver<S> cloth(std::make_shared<const drape::ClothAsset<S>>(
+                               drape::ClothAsset<S>::sheet(drape::test::OnAnchors::sheet())),
+                           settings, 0.1);
+    drape::RigidWorld world(drape::test::noGround());
+    const drape::test::OnAnchors scene(cloth, world, false);
+    const auto r = scene.moveSheetDown(cloth, world, attached, 0.03);
+    INFO((attached ? "by pin targets: " : "by positions: ") << r.describe());
+    CHECK(r.finalGap >= (drape::constants::kSpacerGap - 1) * drape::test::OnAnchors::thickness - 0.001);
+    CHECK(r.finalGap <= drape::test::OnAnchors::thickness);
+    CHECK(r.deepest == 0);
+    CHECK(r.speed <= 1e-3);
+  }
+}
+
 TEMPLATE_TEST_CASE("a ball on a cloth lying on a box, both rigid bodies, is held off the box by the cloth",
                    "[coupling]", float, double) {
   using S = TestType;

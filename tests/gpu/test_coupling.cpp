@@ -253,6 +253,26 @@ TEST_CASE("coupling on the GPU: a body dropped onto a cloth's pinned vertices re
   }
 }
 
+TEST_CASE("coupling on the GPU: anchors follow the program, by new positions or by pin targets", "[gpu]") {
+  // The CPU test's scene and bounds: the anchors are listed again from the host's copy of the state.
+  for (const bool attached : {false, true}) {
+    drape::Settings settings;
+    settings.thickness = drape::test::OnAnchors::thickness;
+    drape::gpu::Solver cloth(drape::test::gpuContext(),
+                             std::make_shared<const drape::ClothAsset<float>>(
+                                 drape::ClothAsset<float>::sheet(drape::test::OnAnchors::sheet())),
+                             settings, 0.1);
+    drape::RigidWorld world(drape::test::noGround());
+    const drape::test::OnAnchors scene(cloth, world, false);
+    const auto r = scene.moveSheetDown(cloth, world, attached, 0.03);
+    INFO((attached ? "by pin targets: " : "by positions: ") << r.describe());
+    CHECK(r.finalGap >= (drape::constants::kSpacerGap - 1) * drape::test::OnAnchors::thickness - 0.001);
+    CHECK(r.finalGap <= drape::test::OnAnchors::thickness);
+    CHECK(r.deepest == 0);
+    CHECK(r.speed <= 1e-3);
+  }
+}
+
 TEST_CASE("coupling on the GPU: a ball on a cloth lying on a box, both rigid bodies, is held off the box", "[gpu]") {
   // The vertices under the ball are pinched between two bodies: the cloth holds them 2 thicknesses apart
   // (pinchSupport in contact_forces.comp, with the pair's effective mass). The CPU test's scene and bounds; with

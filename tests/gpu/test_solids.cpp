@@ -104,7 +104,7 @@ TEST_CASE("settle: the GPU placement outside several contact planes against proj
   const int n = 3000;
   const float thickness = 0.005f;
   RandomContacts r(n, 7);
-  drape::ContactSlot<float> floorSlot;
+  drape::ContactSlot<float> floorSlot{};  // zero: the fields the test does not set are copied too
   floorSlot.normal = Vec3<float>::UnitZ();
   floorSlot.offset = thickness;
   floorSlot.body = -1;

@@ -90,8 +90,9 @@ void supportAnchors(const std::vector<CompiledSolid<Shape, S>>& compiled, const 
     for (const Anchor& a : anchors) {
       const Vec3<S> x = (a.world - origin).template cast<S>();
       // Outside its box grown by the thickness a body's field is at least the thickness.
-      if (solid.bounded && ((x.array() < solid.boxLow.array() - t).any() || (x.array() > solid.boxHigh.array() + t).any()))
-        continue;
+      const bool outside =
+          (x.array() < solid.boxLow.array() - t).any() || (x.array() > solid.boxHigh.array() + t).any();
+      if (solid.bounded && outside) continue;
       Vec3<S> n;
       const S phi = solid.sdf(x, n);
       if (!(phi < t)) continue;
