@@ -158,8 +158,11 @@ template <class Backend, Scalar S, class... Shapes> class SolverFront {
     detail::require(pin >= 0 && pin < Index(pins_.size()), [&] { return "pin index " + std::to_string(pin) + " out of range"; });
     detail::require(detail::allFinite(target), "pin target is not finite");
     pins_[std::size_t(pin)].target = target;
-    for (coupling::Anchor& a : anchors_)  // an attached vertex of inverse mass 0 follows its target
-      if (a.vertex == pins_[std::size_t(pin)].vertex) a.world = target;
+    // An attached vertex of inverse mass 0 follows its target.
+    if (!anchorsStale_) {
+      const int a = anchorOf_[std::size_t(pins_[std::size_t(pin)].vertex)];
+      if (a >= 0) anchors_[std::size_t(a)].world = target;
+    }
   }
   const std::vector<Pin>& pins() const { return pins_; }
 
@@ -279,12 +282,16 @@ template <class Backend, Scalar S, class... Shapes> class SolverFront {
   void listAnchors() {
     backend().loadState();
     anchors_.clear();
+    anchorOf_.assign(state_.invMass.size(), -1);
     for (std::size_t i = 0; i < state_.invMass.size(); ++i)
-      if (state_.invMass[i] == S(0))
+      if (state_.invMass[i] == S(0)) {
+        anchorOf_[i] = int(anchors_.size());
         anchors_.push_back({Index(i), state_.origin + state_.x[i].template cast<double>()});
-    for (const Pin& p : pins_)
-      for (coupling::Anchor& a : anchors_)
-        if (a.vertex == p.vertex) a.world = p.target;
+      }
+    for (const Pin& p : pins_) {
+      const int a = anchorOf_[std::size_t(p.vertex)];
+      if (a >= 0) anchors_[std::size_t(a)].world = p.target;
+    }
     anchorsStale_ = false;
   }
   /// Each anchor's support of the coupled bodies whose contact shells hold it (coupling::supportAnchors): added to
@@ -411,6 +418,7 @@ template <class Backend, Scalar S, class... Shapes> class SolverFront {
   std::tuple<std::vector<CompiledSolid<Shapes, S>>...> compiled_;
   std::vector<Pin> pins_;
   std::vector<coupling::Anchor> anchors_;  ///< the vertices of inverse mass 0 (listAnchors)
+  std::vector<int> anchorOf_;              ///< each vertex's place in anchors_, -1 for none
   bool anchorsStale_ = true;
   std::vector<CoupledBody*> bodies_;  ///< the dynamic solids' bodies, this substep
   /// Their centres of mass where the substep's contacts were found (advancePose: the start, carried by the
