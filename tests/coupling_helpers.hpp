@@ -135,6 +135,14 @@ struct OnAnchors {
     grid.spacing = 0.02;
     return grid;
   }
+  template <class S> static std::shared_ptr<const ClothAsset<S>> asset() {
+    return std::make_shared<const ClothAsset<S>>(ClothAsset<S>::sheet(sheet()));
+  }
+  static Settings settings() {
+    Settings s;
+    s.thickness = thickness;
+    return s;
+  }
   template <class Cloth> OnAnchors(Cloth& cloth, RigidWorld& world, bool box) {
     for (Index i = 0; i < cloth.vertexCount(); ++i) cloth.pin(i);
     BodyDesc d;

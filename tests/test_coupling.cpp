@@ -19,6 +19,7 @@ namespace {
 
 using drape::test::clothMomentum;
 using drape::test::emptySpace;
+using drape::test::OnAnchors;
 using drape::test::squareCloth;
 using Catch::Contains;
 
@@ -269,17 +270,12 @@ TEMPLATE_TEST_CASE("a body dropped onto a cloth's pinned vertices rests on them"
   // the ball moves at 3.6e-7 m/s (float; 1.6e-11 in double), the box at 7e-5 m/s and 4e-3 rad/s, still settling on
   // the anchors beside its sides.
   for (const bool box : {false, true}) {
-    drape::Settings settings;
-    settings.thickness = drape::test::OnAnchors::thickness;
-    settings.threadCount = 1;
-    drape::Solver<S> cloth(std::make_shared<const drape::ClothAsset<S>>(
-                               drape::ClothAsset<S>::sheet(drape::test::OnAnchors::sheet())),
-                           settings, 0.1);
+    drape::Solver<S> cloth(OnAnchors::asset<S>(), OnAnchors::settings(), 0.1);
     drape::RigidWorld world(drape::test::noGround());
-    const drape::test::OnAnchors scene(cloth, world, box);
+    const OnAnchors scene(cloth, world, box);
     const auto r = scene.land(cloth, world);
     INFO((box ? "box: " : "ball: ") << r.describe());
-    CHECK(r.lowest >= (drape::constants::kSpacerGap - 1) * drape::test::OnAnchors::thickness - 0.001);
+    CHECK(r.lowest >= (drape::constants::kSpacerGap - 1) * OnAnchors::thickness - 0.001);
     CHECK(r.deepest == 0);
     CHECK(r.speed <= 1e-3);
     CHECK(r.spin <= 1e-2);
@@ -293,18 +289,13 @@ TEMPLATE_TEST_CASE("anchors follow the program: a body rests where the pinned ve
   // the pinned sheet, which is then moved 3 cm down, by new positions or by its pins' targets: the ball must fall
   // and rest on it there, not stay held where the anchors were (33 mm over the sheet).
   for (const bool attached : {false, true}) {
-    drape::Settings settings;
-    settings.thickness = drape::test::OnAnchors::thickness;
-    settings.threadCount = 1;
-    drape::Solver<S> cloth(std::make_shared<const drape::ClothAsset<S>>(
-                               drape::ClothAsset<S>::sheet(drape::test::OnAnchors::sheet())),
-                           settings, 0.1);
+    drape::Solver<S> cloth(OnAnchors::asset<S>(), OnAnchors::settings(), 0.1);
     drape::RigidWorld world(drape::test::noGround());
-    const drape::test::OnAnchors scene(cloth, world, false);
+    const OnAnchors scene(cloth, world, false);
     const auto r = scene.moveSheetDown(cloth, world, attached, 0.03);
     INFO((attached ? "by pin targets: " : "by positions: ") << r.describe());
-    CHECK(r.finalGap >= (drape::constants::kSpacerGap - 1) * drape::test::OnAnchors::thickness - 0.001);
-    CHECK(r.finalGap <= drape::test::OnAnchors::thickness);
+    CHECK(r.finalGap >= (drape::constants::kSpacerGap - 1) * OnAnchors::thickness - 0.001);
+    CHECK(r.finalGap <= OnAnchors::thickness);
     CHECK(r.deepest == 0);
     CHECK(r.speed <= 1e-3);
   }

@@ -24,6 +24,7 @@ using drape::Index;
 
 using drape::test::clothMomentum;
 using drape::test::emptySpace;
+using drape::test::OnAnchors;
 
 std::shared_ptr<const drape::ClothAsset<float>> squareCloth(int n, double spacing, double z) {
   return drape::test::squareCloth<float>(n, spacing, z);
@@ -236,17 +237,12 @@ TEST_CASE("coupling on the GPU: a body dropped onto a cloth's pinned vertices re
   // The CPU test's scene and bounds: the anchors' supports, computed on the host, join the GPU's pinches. Without
   // them the bodies fell through the sheet.
   for (const bool box : {false, true}) {
-    drape::Settings settings;
-    settings.thickness = drape::test::OnAnchors::thickness;
-    drape::gpu::Solver cloth(drape::test::gpuContext(),
-                             std::make_shared<const drape::ClothAsset<float>>(
-                                 drape::ClothAsset<float>::sheet(drape::test::OnAnchors::sheet())),
-                             settings, 0.1);
+    drape::gpu::Solver cloth(drape::test::gpuContext(), OnAnchors::asset<float>(), OnAnchors::settings(), 0.1);
     drape::RigidWorld world(drape::test::noGround());
-    const drape::test::OnAnchors scene(cloth, world, box);
+    const OnAnchors scene(cloth, world, box);
     const auto r = scene.land(cloth, world);
     INFO((box ? "box: " : "ball: ") << r.describe());
-    CHECK(r.lowest >= (drape::constants::kSpacerGap - 1) * drape::test::OnAnchors::thickness - 0.001);
+    CHECK(r.lowest >= (drape::constants::kSpacerGap - 1) * OnAnchors::thickness - 0.001);
     CHECK(r.deepest == 0);
     CHECK(r.speed <= 1e-3);
     CHECK(r.spin <= 1e-2);
@@ -256,18 +252,13 @@ TEST_CASE("coupling on the GPU: a body dropped onto a cloth's pinned vertices re
 TEST_CASE("coupling on the GPU: anchors follow the program, by new positions or by pin targets", "[gpu]") {
   // The CPU test's scene and bounds: the anchors are listed again from the host's copy of the state.
   for (const bool attached : {false, true}) {
-    drape::Settings settings;
-    settings.thickness = drape::test::OnAnchors::thickness;
-    drape::gpu::Solver cloth(drape::test::gpuContext(),
-                             std::make_shared<const drape::ClothAsset<float>>(
-                                 drape::ClothAsset<float>::sheet(drape::test::OnAnchors::sheet())),
-                             settings, 0.1);
+    drape::gpu::Solver cloth(drape::test::gpuContext(), OnAnchors::asset<float>(), OnAnchors::settings(), 0.1);
     drape::RigidWorld world(drape::test::noGround());
-    const drape::test::OnAnchors scene(cloth, world, false);
+    const OnAnchors scene(cloth, world, false);
     const auto r = scene.moveSheetDown(cloth, world, attached, 0.03);
     INFO((attached ? "by pin targets: " : "by positions: ") << r.describe());
-    CHECK(r.finalGap >= (drape::constants::kSpacerGap - 1) * drape::test::OnAnchors::thickness - 0.001);
-    CHECK(r.finalGap <= drape::test::OnAnchors::thickness);
+    CHECK(r.finalGap >= (drape::constants::kSpacerGap - 1) * OnAnchors::thickness - 0.001);
+    CHECK(r.finalGap <= OnAnchors::thickness);
     CHECK(r.deepest == 0);
     CHECK(r.speed <= 1e-3);
   }

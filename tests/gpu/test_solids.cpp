@@ -104,8 +104,9 @@ TEST_CASE("settle: the GPU placement outside several contact planes against proj
   const int n = 3000;
   const float thickness = 0.005f;
   RandomContacts r(n, 7);
-  drape::ContactSlot<float> floorSlot{};  // zero: the fields the test does not set are copied too
+  drape::ContactSlot<float> floorSlot{};  // scalars zero; every field is copied, so none is left unset
   floorSlot.normal = Vec3<float>::UnitZ();
+  floorSlot.solidVelocity.setZero();
   floorSlot.offset = thickness;
   floorSlot.body = -1;
   for (int i = 1; i < n; i += 2) {  // of the vertices with two or three slots, every other one
