@@ -358,6 +358,7 @@ nlohmann::ordered_json run(const Options& o, [[maybe_unused]] Painter* painter, 
   j["substeps"] = o.config.subSteps;
   j["iterations"] = o.config.base.iterationCount;
   j["method"] = drape::toString(o.config.base.collisionMethod);
+  j["continuous_contact"] = o.config.base.continuousContact;
   j["vertices"] = n;
   j["faces"] = cloth.asset().faceCount();
   j["cloth_mass"] = clothMass;
@@ -431,6 +432,9 @@ int main(int argc, char** argv) {
   app.add_option("--substeps", c.subSteps, "substeps per step")->check(CLI::Range(1, 1000))->capture_default_str();
   app.add_option("--iterations", c.base.iterationCount, "cloth constraint passes per substep")
       ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
+  app.add_option("--continuous", c.base.continuousContact,
+                 "continuous contact (Settings::continuousContact): paths searched, so a fast body cannot pass the cloth")
       ->capture_default_str();
   app.add_option("--method", method, "cloth-solid collision method (vertices: vertex contacts only, the thesis's)")
       ->check(CLI::IsMember({"faces", "vertices", "in-solve"}))
