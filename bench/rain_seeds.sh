@@ -5,11 +5,14 @@
 # the runs beyond 1 mm, and the fastest cloth vertex. The runs are chaotic, so a change is judged over tens of
 # seeds, not a few. Needs jq (Debian `jq`) and a build with the samples.
 #
-#   bash bench/rain_seeds.sh [sample] [first last]     # defaults: build/samples/rigid_rain, seeds 1 to 40
+#   bash bench/rain_seeds.sh [sample] [first last] [flags...]   # defaults: build/samples/rigid_rain, seeds 1 to 40
+#
+# Flags after `last` go to the sample, e.g. `--continuous 0` for the scene without continuous contact.
 set -euo pipefail
 sample=${1:-build/samples/rigid_rain}
 first=${2:-1}
 last=${3:-40}
+shift $(( $# < 3 ? $# : 3 ))
 [ -x "$sample" ] || { echo "rain_seeds.sh: $sample not found (build the samples first)" >&2; exit 2; }
 command -v jq > /dev/null || { echo "rain_seeds.sh: jq not found (apt-get install jq)" >&2; exit 2; }
 json=$(mktemp)
@@ -17,7 +20,7 @@ trap 'rm -f "$json"' EXIT
 
 echo "seed  through  body_mm  floor_mm  fastest_m/s"
 rows=$(for seed in $(seq "$first" "$last"); do
-  "$sample" --bodies 80 --seed "$seed" --json 2> /dev/null > "$json"
+  "$sample" --bodies 80 --seed "$seed" --json "$@" 2> /dev/null > "$json"
   jq -r --arg seed "$seed" \
     '[$seed, .bodies_through_cloth, .max_penetration * 1000, .max_floor_penetration * 1000, .max_cloth_speed] | @tsv' \
     "$json"
