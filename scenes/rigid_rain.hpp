@@ -97,7 +97,7 @@ struct RainConfig {
     s.continuousContact = true;
     return s;
   }();
-  RigidSettings rigid{};       ///< the world's (its ground at z = 0; subStepCount is not used by stepCoupled)
+  RigidSettings rigid{};  ///< the world's (its ground at z = 0; subStepCount is not used by stepCoupled)
 
   void validate() const {
     using detail::require;

@@ -434,7 +434,8 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
   app.add_option("--continuous", c.base.continuousContact,
-                 "continuous contact (Settings::continuousContact): paths searched, so a fast body cannot pass the cloth")
+                 "continuous contact (Settings::continuousContact): each substep's paths searched, so fast bodies "
+                 "do not tunnel through the cloth")
       ->capture_default_str();
   app.add_option("--method", method, "cloth-solid collision method (vertices: vertex contacts only, the thesis's)")
       ->check(CLI::IsMember({"faces", "vertices", "in-solve"}))
