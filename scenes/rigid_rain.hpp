@@ -346,6 +346,8 @@ class SheetCrossings {
   int crossings() const { return crossings_; }  ///< flips counted so far
   /// Bodies that have passed through the sheet at least once.
   int bodiesThrough() const { return int(std::count(through_.begin(), through_.end(), true)); }
+  /// Whether body b has passed through the sheet at least once.
+  bool passed(int b) const { return std::size_t(b) < through_.size() && through_[std::size_t(b)]; }
 
  private:
   const Eigen::Vector3d& at(Index i) const { return x_[std::size_t(i)]; }
