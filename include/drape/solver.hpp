@@ -145,6 +145,7 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
       xBeforeFriction_.resize(state_.x.size());
       guardMarks_.assign(state_.x.size(), 0);
     }
+    if (guard_) guardPaths_.reserve(asset_->triangles.size());
     if (coupled_ && vStart_.size() != state_.v.size()) {
       vStart_.resize(state_.v.size());
       vPre_.resize(state_.v.size());
@@ -511,6 +512,7 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
     if (!far) return;
     const auto& triangles = asset_->triangles;
     const Vec3<S>* before = xBeforeFriction_.data();
+    guardPaths_.gather(triangles, before, x, reach);
     std::uint8_t* marks = guardMarks_.data();
     const int iterations = settings_.pgdIterations;
     const bool exact = settings_.exactGridSearch;
@@ -519,8 +521,8 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
       for (const auto& solid : list)
         if constexpr (!std::decay_t<decltype(solid.sdf)>::kLinear)
           if (solid.bounded)
-            marked += markFrictionCrossings(solid.sdf, solid.boxLow, solid.boxHigh, triangles, before, x, reach,
-                                            iterations, exact, marks);
+            marked += markFrictionCrossings(solid.sdf, solid.boxLow, solid.boxHigh, triangles, guardPaths_, before,
+                                            x, reach, iterations, exact, marks);
     });
     if (marked > 0) {
       for (std::size_t i = 0; i < guardMarks_.size(); ++i)
@@ -550,6 +552,7 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
   bool holdPlanes_ = false;   ///< friction's moves are kept out of the planes (holdOutOfPlane)
   std::vector<Vec3<S>> xBeforeFriction_;  ///< the positions the contact passes left, for the guard
   std::vector<std::uint8_t> guardMarks_;  ///< the guard's marks, cleared as they are undone
+  FrictionPaths<S> guardPaths_;           ///< the faces friction moved far this substep, for the guard
   S travel_ = 0;              ///< the substep's farthest vertex travel (shared by the team)
   bool massesChanged_ = false;  ///< an inverse mass changed since the lane copies were gathered
   std::vector<Vec3<S>> vStart_, vPre_;                  ///< velocities at the substep's start, before contacts

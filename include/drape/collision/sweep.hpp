@@ -89,28 +89,57 @@ DRAPE_NOINLINE bool sweepFace(const Field& sdf, const Vec3<S> (&a)[3], const Vec
   return false;
 }
 
+/// The faces the friction guard judges (docs/design.md §18): those with a corner position friction moved further
+/// than `reach`, in index order, each with the box of its path. Gathered once a substep, then met by each solid's
+/// box, so that a scene of many bodies pays for the faces friction moved far, not for every face once per body.
+template <Scalar S> struct FrictionPaths {
+  std::vector<Index> faces;
+  std::vector<Vec3<S>> low, high;  ///< each path's box: the face where friction found it and where it left it
+
+  /// Room for every face, so that gathering never allocates.
+  void reserve(std::size_t faceCount) {
+    faces.reserve(faceCount);
+    low.reserve(faceCount);
+    high.reserve(faceCount);
+  }
+  void gather(const std::vector<std::array<Index, 3>>& triangles, const Vec3<S>* before, const Vec3<S>* x,
+              S reach) {
+    faces.clear();
+    low.clear();
+    high.clear();
+    for (std::size_t f = 0; f < triangles.size(); ++f) {
+      const auto& t = triangles[f];
+      const Vec3<S> a[3] = {before[t[0]], before[t[1]], before[t[2]]};
+      const Vec3<S> b[3] = {x[t[0]], x[t[1]], x[t[2]]};
+      if (!(std::max({(b[0] - a[0]).squaredNorm(), (b[1] - a[1]).squaredNorm(), (b[2] - a[2]).squaredNorm()}) >
+            reach * reach))
+        continue;
+      faces.push_back(Index(f));
+      low.push_back(a[0].cwiseMin(a[1]).cwiseMin(a[2]).cwiseMin(b[0]).cwiseMin(b[1]).cwiseMin(b[2]));
+      high.push_back(a[0].cwiseMax(a[1]).cwiseMax(a[2]).cwiseMax(b[0]).cwiseMax(b[1]).cwiseMax(b[2]));
+    }
+  }
+};
+
 /// The friction guard (docs/design.md §18). Position friction moved contact vertices from `before` to `x`, each
-/// along its own contact plane; on a solid thinner than a face that can carry a face across it. Every face with a
-/// corner it moved further than `reach`, and whose path from `before` to `x` came within `reach` of the solid
+/// along its own contact plane; on a solid thinner than a face that can carry a face across it. Every face of
+/// `paths` (a corner moved further than `reach`) whose path from `before` to `x` came within `reach` of the solid
 /// after its start (sweepFace), and which the solid then pierces where friction left it, marks its three corners. A
 /// face whose corners all moved less cannot have crossed a solid it started at least `reach` from. Marks only, on
 /// positions nothing changes meanwhile: the result does not depend on the order of the faces. `boxLow`, `boxHigh`:
 /// the solid's box; a path whose box misses it grown by `reach` is passed over. Returns how many faces marked.
 template <Scalar S, class Field>
 Index markFrictionCrossings(const Field& sdf, const Vec3<S>& boxLow, const Vec3<S>& boxHigh,
-                            const std::vector<std::array<Index, 3>>& triangles, const Vec3<S>* before,
-                            const Vec3<S>* x, S reach, int maxIterations, bool exactSearch, std::uint8_t* marks) {
+                            const std::vector<std::array<Index, 3>>& triangles, const FrictionPaths<S>& paths,
+                            const Vec3<S>* before, const Vec3<S>* x, S reach, int maxIterations, bool exactSearch,
+                            std::uint8_t* marks) {
   const Vec3<S> low = boxLow.array() - reach, high = boxHigh.array() + reach;
   Index marked = 0;
-  for (const auto& t : triangles) {
+  for (std::size_t k = 0; k < paths.faces.size(); ++k) {
+    if (!((paths.high[k].array() >= low.array()).all() && (paths.low[k].array() <= high.array()).all())) continue;
+    const auto& t = triangles[std::size_t(paths.faces[k])];
     const Vec3<S> a[3] = {before[t[0]], before[t[1]], before[t[2]]};
     const Vec3<S> b[3] = {x[t[0]], x[t[1]], x[t[2]]};
-    if (!(std::max({(b[0] - a[0]).squaredNorm(), (b[1] - a[1]).squaredNorm(), (b[2] - a[2]).squaredNorm()}) >
-          reach * reach))
-      continue;
-    const Vec3<S> pathLow = a[0].cwiseMin(a[1]).cwiseMin(a[2]).cwiseMin(b[0]).cwiseMin(b[1]).cwiseMin(b[2]);
-    const Vec3<S> pathHigh = a[0].cwiseMax(a[1]).cwiseMax(a[2]).cwiseMax(b[0]).cwiseMax(b[1]).cwiseMax(b[2]);
-    if (!((pathHigh.array() >= low.array()).all() && (pathLow.array() <= high.array()).all())) continue;
     FaceQuery<S> hit;
     int evaluations = 0;
     S when = 0;
@@ -126,6 +155,16 @@ Index markFrictionCrossings(const Field& sdf, const Vec3<S>& boxLow, const Vec3<
     }
   }
   return marked;
+}
+/// The same over every face (the paths gathered here).
+template <Scalar S, class Field>
+Index markFrictionCrossings(const Field& sdf, const Vec3<S>& boxLow, const Vec3<S>& boxHigh,
+                            const std::vector<std::array<Index, 3>>& triangles, const Vec3<S>* before,
+                            const Vec3<S>* x, S reach, int maxIterations, bool exactSearch, std::uint8_t* marks) {
+  FrictionPaths<S> paths;
+  paths.gather(triangles, before, x, reach);
+  return markFrictionCrossings(sdf, boxLow, boxHigh, triangles, paths, before, x, reach, maxIterations, exactSearch,
+                               marks);
 }
 
 }  // namespace drape
