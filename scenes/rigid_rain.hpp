@@ -294,7 +294,11 @@ template <Scalar S, class ClothSolver = Solver<S>> class RigidRain {
 /// whose nearest point is on the sheet's boundary has no side: a body that fell past the cloth's edge and that
 /// the edge then swung over has gone around the sheet, not through it. Observe once a step: a body that crosses
 /// is seen on both sides as long as it moves less than `margin` relative to the sheet between two readings (the
-/// rain's bodies reach 8 m/s, 8 cm a step).
+/// rain's bodies reach 8 m/s, 8 cm a step). For the same reason a body that rounds a free edge between two
+/// readings can be seen on both sides of the sheet, so each body counted through is also counted by where it was:
+/// at the border, where the sheet's vertex nearest its centre at the reading that counted it lies within one ring
+/// of vertices of the boundary (on a sheet of rows and columns, in the border row or column or the one beside it),
+/// or in the interior, where no contact's failure can be mistaken for a walk around the edge.
 class SheetCrossings {
  public:
   template <Scalar S> explicit SheetCrossings(const ClothAsset<S>& asset, double margin = 0.1)
@@ -312,6 +316,20 @@ class SheetCrossings {
         boundaryEdges_.insert(edge);
         boundaryVertex_[std::size_t(edge.first)] = boundaryVertex_[std::size_t(edge.second)] = true;
       }
+    // Each vertex's ring: how many edges from the boundary, breadth first from it.
+    std::vector<std::vector<Index>> neighbours(std::size_t(asset.vertexCount()));
+    for (const auto& entry : edgeUses) {
+      const auto& [a, b] = entry.first;
+      neighbours[std::size_t(a)].push_back(b);
+      neighbours[std::size_t(b)].push_back(a);
+    }
+    ring_.assign(std::size_t(asset.vertexCount()), -1);
+    std::vector<Index> queue;
+    for (Index v = 0; v < asset.vertexCount(); ++v)
+      if (boundaryVertex_[std::size_t(v)]) ring_[std::size_t(v)] = 0, queue.push_back(v);
+    for (std::size_t k = 0; k < queue.size(); ++k)
+      for (Index w : neighbours[std::size_t(queue[k])])
+        if (ring_[std::size_t(w)] < 0) ring_[std::size_t(w)] = ring_[std::size_t(queue[k])] + 1, queue.push_back(w);
   }
 
   /// Reads every body's side of the sheet and counts the flips since the last observation.
@@ -326,16 +344,18 @@ class SheetCrossings {
     side_.resize(std::size_t(world.bodyCount()), 0);
     face_.resize(std::size_t(world.bodyCount()), -1);
     through_.resize(std::size_t(world.bodyCount()), false);
+    atBorder_.resize(std::size_t(world.bodyCount()), false);
     for (int b = 0; b < world.bodyCount(); ++b) {
       const Eigen::Vector3d c = world.body(b).pose().position;
-      Index face = -1;
-      const int now = sideOf(c, world.body(b).boundingRadius(), face);
+      Index face = -1, nearest = -1;
+      const int now = sideOf(c, world.body(b).boundingRadius(), face, nearest);
       int& before = side_[std::size_t(b)];
       if (now == kOnSheet) continue;  // the last side stands
       // A flip does not count where the face that was nearest before still has the body on its old side: under a
       // fold the nearest point can jump between two layers of opposite orientation while the body lies still.
       if (now != 0 && before != 0 && now != before && sideAgainst(c, face_[std::size_t(b)]) != before) {
         ++crossings_;
+        if (!through_[std::size_t(b)]) atBorder_[std::size_t(b)] = ring_[std::size_t(nearest)] <= 1;
         through_[std::size_t(b)] = true;
       }
       before = now;
@@ -348,6 +368,14 @@ class SheetCrossings {
   int bodiesThrough() const { return int(std::count(through_.begin(), through_.end(), true)); }
   /// Whether body b has passed through the sheet at least once.
   bool passed(int b) const { return std::size_t(b) < through_.size() && through_[std::size_t(b)]; }
+  /// Whether body b, counted through, was at the border when first counted (see the class's comment).
+  bool passedAtBorder(int b) const { return passed(b) && atBorder_[std::size_t(b)]; }
+  /// Bodies counted through the sheet's interior: their first count away from its border.
+  int bodiesThroughInterior() const {
+    int count = 0;
+    for (std::size_t b = 0; b < through_.size(); ++b) count += through_[b] && !atBorder_[b];
+    return count;
+  }
 
  private:
   const Eigen::Vector3d& at(Index i) const { return x_[std::size_t(i)]; }
@@ -357,11 +385,16 @@ class SheetCrossings {
   }
   static constexpr int kOnSheet = 2;
   /// +1 or -1 for the side of the sheet `c` is on, 0 where it has none (far from the sheet, or nearest its
-  /// boundary), kOnSheet on it; `face` is the face holding the nearest point (-1 where there is none).
-  int sideOf(const Eigen::Vector3d& c, double radius, Index& face) const {
+  /// boundary), kOnSheet on it; `face` is the face holding the nearest point (-1 where there is none), `vertex`
+  /// the vertex nearest `c`.
+  int sideOf(const Eigen::Vector3d& c, double radius, Index& face, Index& vertex) const {
     face = -1;
+    vertex = 0;
     double nearestVertex = 1e300;
-    for (const auto& p : x_) nearestVertex = std::min(nearestVertex, (p - c).squaredNorm());
+    for (std::size_t i = 0; i < x_.size(); ++i) {
+      const double d = (x_[i] - c).squaredNorm();
+      if (d < nearestVertex) nearestVertex = d, vertex = Index(i);
+    }
     nearestVertex = std::sqrt(nearestVertex);
     if (nearestVertex > radius + margin_ + longestEdge_) return 0;
     // The nearest point of the sheet is no further than the nearest vertex, so a face holding it has every
@@ -433,11 +466,13 @@ class SheetCrossings {
   std::vector<std::vector<Index>> vertexFaces_;
   std::set<std::pair<Index, Index>> boundaryEdges_;
   std::vector<bool> boundaryVertex_;
+  std::vector<int> ring_;  ///< each vertex's count of edges from the boundary
   std::vector<Eigen::Vector3d> x_;
   double longestEdge_ = 0;
   std::vector<int> side_;
   std::vector<Index> face_;  ///< each body's nearest face at the last reading
   std::vector<bool> through_;
+  std::vector<bool> atBorder_;  ///< by body: first counted through at the border
   int crossings_ = 0;
 };
 

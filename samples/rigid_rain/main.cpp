@@ -232,7 +232,7 @@ nlohmann::ordered_json run(const Options& o, [[maybe_unused]] Painter* painter, 
   double maxPen = 0, maxPenPinned = 0, maxPenAtBodies = 0, maxFloorPen = 0, maxBodySpeed = 0, maxClothSpeed = 0,
          maxBodySpin = 0, maxBodySpinBound = 0, maxSpinRatio = 0;
   int maxPenStep = 0, maxBodySpeedStep = 0, maxBodySpinStep = 0;
-  int underAtRelease = -1, offAtRelease = -1, throughAtRelease = -1;
+  int underAtRelease = -1, offAtRelease = -1, throughAtRelease = -1, interiorAtRelease = -1;
   bool finite = true;
   // Bodies that passed through the cloth's sheet, watched step by step (SheetCrossings): before the release,
   // while the pinned cloth holds them, and after it.
@@ -275,6 +275,7 @@ nlohmann::ordered_json run(const Options& o, [[maybe_unused]] Painter* painter, 
       if (c.z() < z) ++under;
     }
     underAtRelease = under, offAtRelease = off, throughAtRelease = sheet.bodiesThrough();
+    interiorAtRelease = sheet.bodiesThroughInterior();
   };
   sheet.observe(cloth, world);
   for (int s = 1; s <= o.steps; ++s) {
@@ -384,10 +385,14 @@ nlohmann::ordered_json run(const Options& o, [[maybe_unused]] Painter* painter, 
   j["max_cloth_speed"] = maxClothSpeed;
   if (underAtRelease >= 0) {
     j["bodies_through_cloth_at_release"] = throughAtRelease;  // passed through the sheet while it was pinned
+    j["bodies_through_cloth_interior_at_release"] = interiorAtRelease;  // of them, away from its border
     j["bodies_under_cloth_at_release"] = underAtRelease;
     j["bodies_off_cloth_at_release"] = offAtRelease;
   }
   j["bodies_through_cloth"] = sheet.bodiesThrough();  // the whole run
+  // Of them, those first counted away from the sheet's border (a body rounding a free edge between two readings
+  // is counted at the border: SheetCrossings).
+  j["bodies_through_cloth_interior"] = sheet.bodiesThroughInterior();
   j["sheet_crossings"] = sheet.crossings();
   j["final_body_z_min"] = heights.empty() ? 0 : *std::min_element(heights.begin(), heights.end());
   j["final_body_z_median"] = median(heights);
@@ -511,11 +516,14 @@ int main(int argc, char** argv) {
                  j["final_body_z_max"].get<double>(), j["final_lowest_body_point"].get<double>(),
                  j["final_max_strain"].get<double>());
     if (j.contains("bodies_through_cloth_at_release"))
-      std::fprintf(stderr, "  at the release: %d bodies through the cloth, %d under it, %d off it\n",
-                   j["bodies_through_cloth_at_release"].get<int>(), j["bodies_under_cloth_at_release"].get<int>(),
-                   j["bodies_off_cloth_at_release"].get<int>());
-    std::fprintf(stderr, "  bodies through the cloth over the run: %d (%d crossings)\n",
-                 j["bodies_through_cloth"].get<int>(), j["sheet_crossings"].get<int>());
+      std::fprintf(stderr,
+                   "  at the release: %d bodies through the cloth (%d away from its border), %d under it, %d off it\n",
+                   j["bodies_through_cloth_at_release"].get<int>(),
+                   j["bodies_through_cloth_interior_at_release"].get<int>(),
+                   j["bodies_under_cloth_at_release"].get<int>(), j["bodies_off_cloth_at_release"].get<int>());
+    std::fprintf(stderr, "  bodies through the cloth over the run: %d, %d away from its border (%d crossings)\n",
+                 j["bodies_through_cloth"].get<int>(), j["bodies_through_cloth_interior"].get<int>(),
+                 j["sheet_crossings"].get<int>());
     return j["finite"].get<bool>() ? 0 : 3;
   } catch (const std::exception& e) {
     std::cerr << "rigid_rain: " << e.what() << '\n';
