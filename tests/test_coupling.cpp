@@ -731,7 +731,7 @@ TEMPLATE_TEST_CASE("no body of the rain passes through its pinned cloth: continu
     c.base.continuousContact = continuous;
     drape::scenes::RigidRain<TestType> scene(c);
     const auto& cloth = scene.cloth();
-    drape::scenes::SheetCrossings meter(cloth.asset());
+    drape::scenes::SheetCrossings meter(cloth.asset(), drape::scenes::SheetCrossings::marginFor(c.dt / c.subSteps));
     meter.observe(cloth, scene.world());
     double deepest = 0;
     while (!scene.released()) {
@@ -762,7 +762,8 @@ TEST_CASE("the sheet-crossing meter sees bodies pass through the rain's cloth at
   c.bodies = 80;
   c.subSteps = 2;
   drape::scenes::RigidRain<float> scene(c);
-  drape::scenes::SheetCrossings meter(scene.cloth().asset());
+  drape::scenes::SheetCrossings meter(scene.cloth().asset(),
+                                     drape::scenes::SheetCrossings::marginFor(c.dt / c.subSteps));
   meter.observe(scene.cloth(), scene.world());
   while (!scene.released()) scene.step([&](const auto&) { meter.observe(scene.cloth(), scene.world()); });
   INFO("bodies through the cloth before the release: " << meter.bodiesThrough());

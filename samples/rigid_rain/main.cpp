@@ -236,7 +236,8 @@ nlohmann::ordered_json run(const Options& o, [[maybe_unused]] Painter* painter, 
   bool finite = true;
   // Bodies that passed through the cloth's sheet, watched substep by substep (SheetCrossings): before the release,
   // while the pinned cloth holds them, and after it.
-  drape::scenes::SheetCrossings sheet(cloth.asset());
+  drape::scenes::SheetCrossings sheet(cloth.asset(),
+                                     drape::scenes::SheetCrossings::marginFor(o.config.dt / o.config.subSteps));
   // Bodies under the cloth and bodies not over it, measured just before the release. A body is over the cloth
   // where its centre lies inside the outline of the cloth's boundary vertices in x, y (even-odd rule), and under
   // it where the centre is also below the cloth vertex nearest it in x, y: a body that fell past an edge the
