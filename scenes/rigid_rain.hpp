@@ -368,7 +368,7 @@ class SheetCrossings {
       if (now == kOnSheet) continue;  // the last side stands
       // A flip does not count where the face that was nearest before still has the body on its old side: under a
       // fold the nearest point can jump between two layers of opposite orientation while the body lies still. Nor
-      // where that face now has the body off its boundary: it went around that edge, or lies under a fold of it.
+      // where that face now has the body nearest its boundary: it went around that edge, or lies under its fold.
       const int then = now != 0 && before != 0 && now != before ? sideAgainst(c, face_[std::size_t(b)]) : before;
       if (then != before && then != 0) {
         ++crossings_;
