@@ -703,6 +703,26 @@ TEST_CASE("the sheet-crossing meter counts a body through the cloth, and not one
     walk(meter, {-0.05, 0.005, 0.01}, {-0.05, 0.005, 0.0375});
     CHECK(meter.crossings() == 1);
   }
+  SECTION("over a fold of the free edge, then past the fold's edge to over the sheet: none") {
+    // The last two columns folded back 1 cm over the sheet (x to 0.12 - x, z = 0.01), the free edge at x = 0.02. A
+    // body over the fold, nearest its upper layer, moves past that edge to over the sheet: its side flips with the
+    // layer nearest it, and the face nearest before now has it nearest its free edge. It went around the edge (the
+    // rain's seed 78); before the rule for a face's boundary the meter counted it.
+    for (std::size_t i = 0; i < sheet.x.size(); ++i) {
+      const Eigen::Vector3d r = asset.origin + asset.restPositions[i];  // x and y in [-0.1, 0.1]
+      sheet.x[i] = r.x() < 0.07 ? Eigen::Vector3d(r.x(), r.y(), 0) : Eigen::Vector3d(0.12 - r.x(), r.y(), 0.01);
+    }
+    drape::scenes::SheetCrossings meter(asset);
+    world.body(0).state.pose.position = {0.03, 0.003, 0.02};
+    meter.observe(sheet, world);
+    world.body(0).state.pose.position = {-0.01, 0.003, 0.02};
+    meter.observe(sheet, world);
+    CHECK(meter.crossings() == 0);
+    // Straight down through the sheet beside the fold: counted.
+    drape::scenes::SheetCrossings down(asset);
+    walk(down, {-0.05, 0.003, 0.05}, {-0.05, 0.003, -0.05});
+    CHECK(down.crossings() == 1);
+  }
   SECTION("the sheet swung over a ball that lay beside it: none") {
     drape::scenes::SheetCrossings meter(asset);
     world.body(0).state.pose.position = {0.16, 0, -0.04};
