@@ -61,6 +61,7 @@ template <Scalar S> class ContactPasses {
     every_.resize(std::max(std::size_t(vertexCount), triangles.size()));
     for (std::size_t k = 0; k < every_.size(); ++k) every_[k] = Index(k);
     movedStamps_.assign(std::size_t(vertexCount), 0u);
+    gaps_.assign(std::size_t(vertexCount), S(0));
     wave_.forget();
     facePass_ = 0;
   }
@@ -236,9 +237,18 @@ template <Scalar S> class ContactPasses {
               facePass_ = 1;
               std::fill(movedStamps_.begin(), movedStamps_.end(), 0u);
             }
-            skip_ = {kept_->faces.data(), bins_.drift(), movedStamps_.data(), facePass_};
+            skip_ = {kept_->faces.data(), gaps_.data(), movedStamps_.data(), facePass_};
           }
         }
+      }
+      if (kFacePass && kept_ != nullptr) {
+        // How far each vertex is from its binned position: a face whose corners all stay within its kept clearance
+        // is passed over, where the bins' drift, the farthest any vertex has gone, would hold back most of them.
+        const Vec3<S>* binned = bins_.binned();
+        S* gaps = gaps_.data();
+        teamFor(n, [&](Index b, Index e) {
+          for (Index i = b; i < e; ++i) gaps[i] = (x[i] - binned[i]).squaredNorm();
+        });
       }
       if constexpr (kFacePass) {
         const ItemList faces{whole_ ? every_.data() : nearFaces_.data()};
@@ -355,6 +365,7 @@ template <Scalar S> class ContactPasses {
   std::vector<Index> nearVertices_, nearFaces_;  ///< what the bins found near the current solid
   std::vector<Index> every_;  ///< 0, 1, 2, ...: every vertex and face, for a solid that holds most of the cloth
   std::vector<std::uint32_t> movedStamps_;        ///< by vertex (KeptClearance::moved)
+  std::vector<S> gaps_;                          ///< by vertex (KeptClearance::gap2)
   std::uint32_t facePass_ = 0;                   ///< face passes with kept clearances so far
   KeptClearance<S> skip_;                        ///< the current face pass's (shared by the team)
   FaceWave wave_;                                ///< the face passes' plan for a team

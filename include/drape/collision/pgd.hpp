@@ -327,10 +327,14 @@ template <class Field> constexpr double lipschitzOf() {
 /// With kClearance, a culled face also states by how much: `clearance` is a distance that every point of the face
 /// may move by without coming within `margin` of the solid, less a rounding slack (kClearanceSlack of the
 /// scales involved); 0 where the face was not culled. The face pass keeps it between substeps (KeptClearance).
+///
+/// With `boundsFirst` false the cheap bounds that only cull what the search would cull too (the corners' bound on a
+/// ball or a capsule, a field's lower bound) are left out: a face that was in contact at its last test mostly
+/// still is, and its search culls it anyway if not. The answer is the same either way.
 template <bool kCull, bool kClearance = false, Scalar S, class Field>
 DRAPE_ALWAYS_INLINE bool queryFace(const Field& sdf, const Vec3<S>& x0, const Vec3<S>& x1, const Vec3<S>& x2,
                                    S margin, int maxIterations, FaceQuery<S>& q, bool exactSearch = true,
-                                   [[maybe_unused]] S* clearance = nullptr) {
+                                   [[maybe_unused]] S* clearance = nullptr, [[maybe_unused]] bool boundsFirst = true) {
   static_assert(kCull || !kClearance, "only a culled face has a clearance");
   if constexpr (kClearance) *clearance = S(0);
   if constexpr (requires { Field::kPointCore; }) {
@@ -338,7 +342,7 @@ DRAPE_ALWAYS_INLINE bool queryFace(const Field& sdf, const Vec3<S>& x0, const Ve
     // closed form, exact to rounding, where cutting planes close in on a curved field one cut at a time. The
     // exact minimum culls by itself, so the bounding sphere is not needed.
     const S reach = sdf.radius + margin;
-    if constexpr (kCull) {
+    if (kCull && boundsFirst) {
       // Most faces near a ball are clear of it, and their corners tell so without the nearest point's branches:
       // for p = sum b_k x_k, |p - c|^2 = sum b_k |x_k - c|^2 - sum_{j<k} b_j b_k |x_j - x_k|^2, so no point of
       // the face is nearer than the nearest corner's squared distance less a third of the longest edge's square.
@@ -383,7 +387,7 @@ DRAPE_ALWAYS_INLINE bool queryFace(const Field& sdf, const Vec3<S>& x0, const Ve
     const S length2 = detail::dot3(d, d);
     const Vec3<S> e01 = detail::minus3(x1, x0), e12 = detail::minus3(x2, x1), e20 = detail::minus3(x0, x2);
     const S edge = std::max({detail::dot3(e01, e01), detail::dot3(e12, e12), detail::dot3(e20, e20)});
-    if constexpr (kCull) {
+    if (kCull && boundsFirst) {
       const S corner = std::min({detail::squaredToSegment(x0, a, d, length2),
                                  detail::squaredToSegment(x1, a, d, length2),
                                  detail::squaredToSegment(x2, a, d, length2)});
@@ -414,14 +418,16 @@ DRAPE_ALWAYS_INLINE bool queryFace(const Field& sdf, const Vec3<S>& x0, const Ve
   const FaceSphere<S> sphere = faceSphere<S>(x0, x1, x2);
   if constexpr (kCull && requires { sdf.lowerBound(sphere.centre); }) {
     // A field with a cheap lower bound culls with it first: where the bound clears the sphere, phi does too.
-    const S bound = sdf.lowerBound(sphere.centre);
-    if (bound > sphere.radius + margin) {
-      // The bound (a largest plane distance) is 1-Lipschitz, as the field is.
-      if constexpr (kClearance)
-        *clearance = bound - sphere.radius - margin -
-                     S(kClearanceSlack) *
-                         (largestAbs(sphere.centre) + sphere.radius + std::abs(bound) + margin);
-      return false;
+    if (boundsFirst) {
+      const S bound = sdf.lowerBound(sphere.centre);
+      if (bound > sphere.radius + margin) {
+        // The bound (a largest plane distance) is 1-Lipschitz, as the field is.
+        if constexpr (kClearance)
+          *clearance = bound - sphere.radius - margin -
+                       S(kClearanceSlack) *
+                           (largestAbs(sphere.centre) + sphere.radius + std::abs(bound) + margin);
+        return false;
+      }
     }
   }
   Vec3<S> gradC;

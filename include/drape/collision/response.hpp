@@ -283,16 +283,19 @@ template <Scalar S> struct SweepInputs {
 /// What the face pass keeps between substeps for a solid that does not move and meets most of the cloth
 /// (ContactPasses, docs/design.md §13 "Clearances kept between substeps"): for each face, how far its vertices may
 /// move from where the bins took them before the face can come within the thickness, as its last test showed.
-/// Every vertex lies within `drift` of its binned position when the pass starts (the bins' drift), so a face
-/// whose clearance exceeds that is still culled, and the pass passes over it without a test. A face in contact
-/// stamps the corners it moved: the faces visited after it that share such a corner may now be further than the
-/// drift from their binned positions, so they are tested and keep no clearance this time. Faces that share a corner
+/// Each vertex's distance from its binned position is measured when the pass starts (`gap2`), so a face whose
+/// clearance exceeds its corners' distances is still culled, and the pass passes over it without a test. A face in
+/// contact stamps the corners it moved: the faces visited after it that share such a corner may now be further than
+/// that from their binned positions, so they are tested and keep no clearance this time. Faces that share a corner
 /// are visited in index order (on any number of threads, FaceWave), so a stamp a face reads was left by a face
 /// before it. What a face reads thus depends only on the faces that share its corners, not on the order of the
 /// others.
 template <Scalar S> struct KeptClearance {
-  S* clear = nullptr;  ///< by face index; -infinity where the face was not culled or not yet tested
-  S drift = 0;
+  /// By face index: -infinity where the face was not culled or not yet tested, kTouched where it was in contact.
+  S* clear = nullptr;
+  /// By vertex index: its squared distance from its binned position when the pass starts (at most the square of
+  /// the bins' drift).
+  const S* gap2 = nullptr;
   /// By vertex index: `pass` where a face of this pass moved the vertex (one store per moved corner). Integers, so
   /// that the stamps' stores cannot alias the positions the pass reads.
   std::uint32_t* moved = nullptr;
@@ -301,15 +304,27 @@ template <Scalar S> struct KeptClearance {
   DRAPE_ALWAYS_INLINE bool cornerMoved(const std::array<Index, 3>& t) const {
     return (moved[t[0]] == pass) | (moved[t[1]] == pass) | (moved[t[2]] == pass);
   }
-  /// Whether face f (corners t) may be passed over: its clearance exceeds the drift and no corner of it has moved.
+  /// The squared distance of face t's farthest corner from its binned position.
+  DRAPE_ALWAYS_INLINE S farthest2(const std::array<Index, 3>& t) const {
+    return std::max({gap2[t[0]], gap2[t[1]], gap2[t[2]]});
+  }
+  /// Whether face f (corners t) may be passed over: its clearance exceeds its corners' distances from their binned
+  /// positions and no corner of it has moved.
   DRAPE_ALWAYS_INLINE bool clearOf(Index f, const std::array<Index, 3>& t) const {
-    return clear[f] > drift && !cornerMoved(t);
+    const S c = clear[f];
+    return c > S(0) && c * c > farthest2(t) && !cornerMoved(t);
   }
   /// After a face moved vertex v.
   DRAPE_ALWAYS_INLINE void stamp(Index v) const { moved[v] = pass; }
-  /// The clearance face f keeps: what its test found beyond the drift, or none where a corner has moved.
+  /// A face in contact at its last test keeps this clearance, which passes over nothing: its next test goes
+  /// straight to its search (queryFace's `boundsFirst`). Any other face that was not culled keeps -infinity.
+  static constexpr S kTouched = -std::numeric_limits<S>::max();
+  DRAPE_ALWAYS_INLINE bool touchedLast(Index f) const { return clear[f] == kTouched; }
+  DRAPE_ALWAYS_INLINE void touched(Index f) const { clear[f] = kTouched; }
+  /// The clearance face f keeps: what its test found less its farthest corner's distance from its binned position,
+  /// or none where a corner has moved.
   DRAPE_ALWAYS_INLINE void keep(Index f, const std::array<Index, 3>& t, S found) const {
-    clear[f] = cornerMoved(t) ? -std::numeric_limits<S>::infinity() : found - drift;
+    clear[f] = cornerMoved(t) ? -std::numeric_limits<S>::infinity() : found - rootOf(farthest2(t));
   }
 };
 
@@ -674,12 +689,16 @@ S projectFaceContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, int p
   for (Index f = gate.first(count); f < count; f = gate.next(f, count)) {
     gate.wait(f);
     const auto& t = triangles[std::size_t(ids[f])];
+    // kSkip: a face in contact at its last test goes to its search without the cheap culls before it, which would
+    // mostly fail (the answer is the same either way: they cull only faces the search finds clear).
+    [[maybe_unused]] bool boundsFirst = true;
     if constexpr (kSkip) {
       if (skip.clearOf(ids[f], t)) {
         ++counts.facesCulled;
         ++counts.facesKeptClear;
         continue;
       }
+      boundsFirst = !skip.touchedLast(ids[f]);
     }
     if constexpr (kSweep) {
       // Continuous contact: a face whose corners travelled further than the gate relative to the solid is
@@ -730,7 +749,7 @@ S projectFaceContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, int p
         }
       }
     }
-    if constexpr (kBoxed && kCull) {
+    if (kBoxed && kCull && boundsFirst) {
       const Vec3<S> faceLow = x[t[0]].cwiseMin(x[t[1]]).cwiseMin(x[t[2]]);
       const Vec3<S> faceHigh = x[t[0]].cwiseMax(x[t[1]]).cwiseMax(x[t[2]]);
       if (!((faceHigh.array() >= boxLow.array()).all() && (faceLow.array() <= boxHigh.array()).all())) {
@@ -744,7 +763,7 @@ S projectFaceContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, int p
     FaceQuery<S> q;
     [[maybe_unused]] S clearance = 0;
     if (!queryFace<kCull, kSkip>(solid.sdf, x[t[0]], x[t[1]], x[t[2]], thickness, pgdIterations, q, exactSearch,
-                                 &clearance)) {
+                                 &clearance, boundsFirst)) {
       if constexpr (kSkip) skip.keep(ids[f], t, clearance);
       ++counts.facesCulled;
       ++counts.sdfEvaluations;
@@ -753,6 +772,7 @@ S projectFaceContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, int p
     if constexpr (kSkip) skip.clear[ids[f]] = -std::numeric_limits<S>::infinity();
     counts.sdfEvaluations += q.evaluations;
     if (q.phi >= thickness - faceContactSlack(thickness, q.point)) continue;
+    if constexpr (kSkip) skip.touched(ids[f]);
     if constexpr (kHold) {
       HeldPoint<S>& h = held.points[ids[f]];
       if (h.place == held.place) {
