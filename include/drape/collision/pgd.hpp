@@ -330,7 +330,7 @@ template <class Field> constexpr double lipschitzOf() {
 ///
 /// With `boundsFirst` false the cheap bounds that only cull what the search would cull too (the corners' bound on a
 /// ball or a capsule, a field's lower bound) are left out: a face that was in contact at its last test mostly
-/// still is, and its search culls it anyway if not. The answer is the same either way.
+/// still is, and if not, its search finds it clear. Which faces are in contact is the same either way.
 template <bool kCull, bool kClearance = false, Scalar S, class Field>
 DRAPE_ALWAYS_INLINE bool queryFace(const Field& sdf, const Vec3<S>& x0, const Vec3<S>& x1, const Vec3<S>& x2,
                                    S margin, int maxIterations, FaceQuery<S>& q, bool exactSearch = true,
