@@ -9,7 +9,6 @@
 
 #include <drape/drape.hpp>
 #include <drape/coupling/rigid_world.hpp>
-#include <drape/sdf/grid.hpp>  // detail::closestOnTriangle
 #include <drape/sdf/convex.hpp>  // the bodies' own distance fields (bodyPenetrationAtBodies)
 
 #include <algorithm>
@@ -21,7 +20,6 @@
 #include <memory>
 #include <numbers>
 #include <random>
-#include <set>
 #include <string>
 #include <type_traits>
 #include <variant>
@@ -286,208 +284,222 @@ template <Scalar S, class ClothSolver = Solver<S>> class RigidRain {
   bool released_ = false;
 };
 
-/// Counts bodies passing through the cloth's sheet. Each observation finds, for every body, the point of the sheet
-/// nearest its centre and the side of the sheet the centre is on: along the normal of the face there, or, where
-/// the nearest point is on an edge or a corner shared by several faces, along the angle-weighted normal of those
-/// faces (Bærentzen and Aanæs, "Signed distance computation using the angle weighted pseudonormal", 2005), which
-/// gives the right side at a crease. A body is through when that side flips between two observations in a row,
-/// both of them near the sheet (the centre within the body's bounding radius plus `margin` of it), unless the face
-/// that was nearest at the first of them still has it on its old side: a cloth folded over a body lies over it in
-/// two layers of opposite orientation, and the nearest point can jump from one to the other while the body lies
-/// still (a body at rest under the fallen cloth in the rain was counted 13 times without it); nor where that face
-/// now has the centre nearest its boundary, which no crossing of the interior leaves (seed 78 of the rain: a body
-/// under the fold of a free edge, the nearest point moving from the edge's faces to the layer under them). A centre
-/// whose nearest point is on the sheet's boundary has no side: a body that fell past the cloth's edge and that
-/// the edge then swung over has gone around the sheet, not through it. A body that crosses is seen on both sides
-/// as long as it moves less than `margin` relative to the sheet between two readings (the rain's bodies reach
-/// 8 m/s, 8 cm a step, 8 mm a substep). Read after every substep (the rain's sample and tests do): read once a
-/// step, a body under a fold near a free edge whose nearest point moved to the other layer, and a body that
-/// rounded a free edge, were counted where no reading between them would have. Such a body can still be seen on
-/// both sides of the sheet between two substeps, so each body counted through is also counted by where it was:
-/// at the border, where the sheet's vertex nearest its centre at the reading that counted it lies within one ring
-/// of vertices of the boundary (on a sheet of rows and columns, in the border row or column or the one beside it),
-/// or in the interior, where no contact's failure can be mistaken for a walk around the edge.
+/// Counts bodies passing through the cloth's sheet. Between two readings every cloth vertex and every body's centre
+/// are taken to move in straight lines, as the solver moves a vertex within a substep, and a body is through when its
+/// centre's path meets a face of the sheet swept along its corners' paths: when the centre crosses the plane of a
+/// face, at a moment it lies inside that face (the coplanarity cubic of a point and a moving triangle, as continuous
+/// collision detection solves it; Provot, "Collision and self-collision handling in cloth model dedicated to design
+/// garments", 1997). So a body that goes around a free edge, lies under a fold whose layers swap as the nearest, or
+/// sits beside a fold of the sheet that turns over through itself (the solver has no cloth-cloth contact) is not
+/// counted, however the sheet's nearest point and its side jump: no face passed through its centre. A body counted
+/// through is also counted by where: at the border, where the corner of the crossed face nearest the crossing lies
+/// within one ring of vertices of the boundary (on a sheet of rows and columns, the border row or column or the one
+/// beside it), or in the interior. Read after every substep (the rain's sample and tests do), the straight paths are
+/// the solver's own; read once a step they approximate curved ones.
 class SheetCrossings {
  public:
-  /// The margin for readings `interval` seconds apart: what a body moving at 30 m/s relative to the sheet covers
-  /// between two (the rain's bodies land at up to 8 m/s; its fastest cloth vertices reach 60 m/s rarely). Read
-  /// after every substep of 1 ms, 3 cm: a body further than its bounding radius and that from the sheet does not
-  /// touch it, and a flip there is the sheet curling past it (seed 57 of the rain, a body falling past a pinned
-  /// corner 9 cm from the cloth).
-  static double marginFor(double interval) { return 30.0 * interval; }
-
-  template <Scalar S> explicit SheetCrossings(const ClothAsset<S>& asset, double margin = 0.1)
-      : triangles_(asset.triangles), margin_(margin), vertexFaces_(std::size_t(asset.vertexCount())) {
+  template <Scalar S> explicit SheetCrossings(const ClothAsset<S>& asset) : triangles_(asset.triangles) {
     std::map<std::pair<Index, Index>, int> edgeUses;
-    for (std::size_t f = 0; f < triangles_.size(); ++f)
+    for (const auto& t : triangles_)
       for (int k = 0; k < 3; ++k) {
-        const Index a = triangles_[f][std::size_t(k)], b = triangles_[f][std::size_t((k + 1) % 3)];
+        const Index a = t[std::size_t(k)], b = t[std::size_t((k + 1) % 3)];
         ++edgeUses[{std::min(a, b), std::max(a, b)}];
-        vertexFaces_[std::size_t(a)].push_back(Index(f));
-      }
-    boundaryVertex_.assign(std::size_t(asset.vertexCount()), false);
-    for (const auto& [edge, uses] : edgeUses)
-      if (uses == 1) {
-        boundaryEdges_.insert(edge);
-        boundaryVertex_[std::size_t(edge.first)] = boundaryVertex_[std::size_t(edge.second)] = true;
       }
     // Each vertex's ring: how many edges from the boundary, breadth first from it.
     std::vector<std::vector<Index>> neighbours(std::size_t(asset.vertexCount()));
-    for (const auto& entry : edgeUses) {
-      const auto& [a, b] = entry.first;
-      neighbours[std::size_t(a)].push_back(b);
-      neighbours[std::size_t(b)].push_back(a);
-    }
     ring_.assign(std::size_t(asset.vertexCount()), -1);
     std::vector<Index> queue;
-    for (Index v = 0; v < asset.vertexCount(); ++v)
-      if (boundaryVertex_[std::size_t(v)]) ring_[std::size_t(v)] = 0, queue.push_back(v);
+    for (const auto& [edge, uses] : edgeUses) {
+      neighbours[std::size_t(edge.first)].push_back(edge.second);
+      neighbours[std::size_t(edge.second)].push_back(edge.first);
+      if (uses == 1)
+        for (Index v : {edge.first, edge.second})
+          if (ring_[std::size_t(v)] < 0) ring_[std::size_t(v)] = 0, queue.push_back(v);
+    }
     for (std::size_t k = 0; k < queue.size(); ++k)
       for (Index w : neighbours[std::size_t(queue[k])])
         if (ring_[std::size_t(w)] < 0) ring_[std::size_t(w)] = ring_[std::size_t(queue[k])] + 1, queue.push_back(w);
   }
 
-  /// Reads every body's side of the sheet and counts the flips since the last observation.
+  /// Reads the sheet and the bodies' centres and counts the crossings since the last reading.
   template <class ClothSolver> void observe(const ClothSolver& cloth, const RigidWorld& world) {
-    const Index n = cloth.vertexCount();
-    x_.resize(std::size_t(n));
-    for (Index i = 0; i < n; ++i) x_[std::size_t(i)] = cloth.position(i);
-    longestEdge_ = 0;
-    for (const auto& t : triangles_)
-      for (int k = 0; k < 3; ++k)
-        longestEdge_ = std::max(longestEdge_, (at(t[std::size_t(k)]) - at(t[std::size_t((k + 1) % 3)])).norm());
-    side_.resize(std::size_t(world.bodyCount()), 0);
-    face_.resize(std::size_t(world.bodyCount()), -1);
-    through_.resize(std::size_t(world.bodyCount()), false);
-    atBorder_.resize(std::size_t(world.bodyCount()), false);
-    for (int b = 0; b < world.bodyCount(); ++b) {
-      const Eigen::Vector3d c = world.body(b).pose().position;
-      Index face = -1, nearest = -1;
-      const int now = sideOf(c, world.body(b).boundingRadius(), face, nearest);
-      int& before = side_[std::size_t(b)];
-      if (now == kOnSheet) continue;  // the last side stands
-      // A flip does not count where the face that was nearest before still has the body on its old side: under a
-      // fold the nearest point can jump between two layers of opposite orientation while the body lies still. Nor
-      // where that face now has the body nearest its boundary: it went around that edge, or lies under its fold.
-      const int then = now != 0 && before != 0 && now != before ? sideAgainst(c, face_[std::size_t(b)]) : before;
-      if (then != before && then != 0) {
-        ++crossings_;
-        if (!through_[std::size_t(b)]) atBorder_[std::size_t(b)] = ring_[std::size_t(nearest)] <= 1;
-        through_[std::size_t(b)] = true;
-      }
-      before = now;
-      face_[std::size_t(b)] = face;
+    const std::size_t n = std::size_t(cloth.vertexCount()), bodies = std::size_t(world.bodyCount());
+    x1_.resize(n);
+    for (std::size_t i = 0; i < n; ++i) x1_[i] = cloth.position(Index(i));
+    c1_.resize(bodies);
+    for (std::size_t b = 0; b < bodies; ++b) c1_[b] = world.body(int(b)).pose().position;
+    if (x0_.size() == n) {
+      c0_.resize(bodies, Eigen::Vector3d::Zero());
+      for (std::size_t b = seen_; b < bodies; ++b) c0_[b] = c1_[b];  // a body added since stands still
+      through_.resize(bodies, false);
+      atBorder_.resize(bodies, false);
+      sweep();
     }
+    seen_ = bodies;
+    std::swap(x0_, x1_);
+    std::swap(c0_, c1_);
   }
 
-  int crossings() const { return crossings_; }  ///< flips counted so far
+  int crossings() const { return crossings_; }  ///< crossings counted so far
   /// Bodies that have passed through the sheet at least once.
   int bodiesThrough() const { return int(std::count(through_.begin(), through_.end(), true)); }
   /// Whether body b has passed through the sheet at least once.
   bool passed(int b) const { return std::size_t(b) < through_.size() && through_[std::size_t(b)]; }
   /// Whether body b, counted through, was at the border when first counted (see the class's comment).
   bool passedAtBorder(int b) const { return passed(b) && atBorder_[std::size_t(b)]; }
-  /// Bodies counted through the sheet's interior: their first count away from its border.
+  /// Bodies counted through the sheet's interior: their first crossing away from its border.
   int bodiesThroughInterior() const {
     int count = 0;
     for (std::size_t b = 0; b < through_.size(); ++b) count += through_[b] && !atBorder_[b];
     return count;
   }
 
+  /// When `p`, moving from p0 to p1, meets the triangle whose corners move from a0, b0, c0 to a1, b1, c1, each
+  /// along a straight line over t in [0, 1]: the first such t, or a negative value where it does not. The point
+  /// crosses the triangle's plane where the sign of det(a - p, b - p, c - p), a cubic in t, changes (zero counts
+  /// as below, so a point that stops on the sheet and goes on is counted once), and meets the triangle if it lies
+  /// inside it then (its barycentric weights at least -1e-9; `corner` is the largest weight's corner, 0 to 2). A
+  /// point that moves in the plane of a flat triangle makes no crossing.
+  static double meetTriangle(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1,
+                             const std::array<Eigen::Vector3d, 3>& from, const std::array<Eigen::Vector3d, 3>& to,
+                             int& corner) {
+    const Eigen::Vector3d a = from[0] - p0, b = from[1] - p0, c = from[2] - p0;
+    const Eigen::Vector3d da = to[0] - p1 - a, db = to[1] - p1 - b, dc = to[2] - p1 - c;
+    const double k3 = da.dot(db.cross(dc));
+    const double k2 = a.dot(db.cross(dc)) + da.dot(b.cross(dc)) + da.dot(db.cross(c));
+    const double k1 = a.dot(b.cross(dc)) + a.dot(db.cross(c)) + da.dot(b.cross(c));
+    const double k0 = a.dot(b.cross(c));
+    auto f = [&](double t) { return ((k3 * t + k2) * t + k1) * t + k0; };
+    // Pieces on which the cubic is monotone: split at its derivative's roots in (0, 1).
+    std::array<double, 4> cut{0, 1, 1, 1};
+    int cuts = 1;
+    const double qa = 3 * k3, qb = 2 * k2, qc = k1;
+    auto addCut = [&](double t) {
+      if (t > 0 && t < 1) cut[std::size_t(cuts++)] = t;
+    };
+    if (qa != 0) {
+      const double disc = qb * qb - 4 * qa * qc;
+      if (disc > 0) {
+        const double q = -0.5 * (qb + std::copysign(std::sqrt(disc), qb));
+        addCut(q / qa);
+        if (q != 0) addCut(qc / q);
+      }
+    } else if (qb != 0) {
+      addCut(-qc / qb);
+    }
+    if (cuts == 3 && cut[1] > cut[2]) std::swap(cut[1], cut[2]);
+    cut[std::size_t(cuts)] = 1;
+    for (int k = 0; k < cuts; ++k) {
+      double lo = cut[std::size_t(k)], hi = cut[std::size_t(k + 1)];
+      const bool above = f(lo) > 0;
+      if ((f(hi) > 0) == above) continue;
+      for (int it = 0; it < 100 && hi - lo > 1e-15; ++it) {
+        const double mid = 0.5 * (lo + hi);
+        (f(mid) > 0) == above ? lo = mid : hi = mid;
+      }
+      const double t = hi;
+      const Eigen::Vector3d q = p0 + t * (p1 - p0);
+      std::array<Eigen::Vector3d, 3> at;
+      for (std::size_t i = 0; i < 3; ++i) at[i] = from[i] + t * (to[i] - from[i]) - q;
+      const Eigen::Vector3d normal = (at[1] - at[0]).cross(at[2] - at[0]);
+      const double area2 = normal.squaredNorm();
+      if (!(area2 > 0)) continue;
+      const std::array<double, 3> w{normal.dot(at[1].cross(at[2])) / area2, normal.dot(at[2].cross(at[0])) / area2,
+                                    normal.dot(at[0].cross(at[1])) / area2};
+      if (w[0] < -1e-9 || w[1] < -1e-9 || w[2] < -1e-9) continue;
+      corner = int(std::max_element(w.begin(), w.end()) - w.begin());
+      return t;
+    }
+    return -1;
+  }
+
  private:
-  const Eigen::Vector3d& at(Index i) const { return x_[std::size_t(i)]; }
-  Eigen::Vector3d faceNormal(Index f) const {
-    const auto& t = triangles_[std::size_t(f)];
-    return (at(t[1]) - at(t[0])).cross(at(t[2]) - at(t[0])).normalized();
-  }
-  static constexpr int kOnSheet = 2;
-  /// +1 or -1 for the side of the sheet `c` is on, 0 where it has none (far from the sheet, or nearest its
-  /// boundary), kOnSheet on it; `face` is the face holding the nearest point (-1 where there is none), `vertex`
-  /// the vertex nearest `c`.
-  int sideOf(const Eigen::Vector3d& c, double radius, Index& face, Index& vertex) const {
-    face = -1;
-    vertex = 0;
-    double nearestVertex = 1e300;
-    for (std::size_t i = 0; i < x_.size(); ++i) {
-      const double d = (x_[i] - c).squaredNorm();
-      if (d < nearestVertex) nearestVertex = d, vertex = Index(i);
+  /// The crossings between the last two readings: each face's swept box filed in a grid of cells in x and y, each
+  /// body's path met with the faces whose boxes its own box meets.
+  void sweep() {
+    const std::size_t faces = triangles_.size();
+    boxes_.resize(faces);
+    Eigen::AlignedBox3d all;
+    for (std::size_t f = 0; f < faces; ++f) {
+      Eigen::AlignedBox3d box;
+      for (Index v : triangles_[f]) box.extend(x0_[std::size_t(v)]).extend(x1_[std::size_t(v)]);
+      boxes_[f] = box;
+      all.extend(box);
     }
-    nearestVertex = std::sqrt(nearestVertex);
-    if (nearestVertex > radius + margin_ + longestEdge_) return 0;
-    // The nearest point of the sheet is no further than the nearest vertex, so a face holding it has every
-    // corner within that distance plus the face's longest edge.
-    const double reach = nearestVertex + longestEdge_;
-    double best = 1e300;
-    Index bestFace = -1;
-    detail::ClosestOnTriangle nearest;
-    for (std::size_t f = 0; f < triangles_.size(); ++f) {
-      const auto& t = triangles_[f];
-      if ((at(t[0]) - c).norm() > reach) continue;
-      const detail::ClosestOnTriangle q = detail::closestOnTriangle(c, at(t[0]), at(t[1]), at(t[2]));
-      const double d = (q.point - c).squaredNorm();
-      if (d < best) best = d, bestFace = Index(f), nearest = q;
-    }
-    if (bestFace < 0 || std::sqrt(best) > radius + margin_) return 0;
-    face = bestFace;
-    return sideAt(c, bestFace, nearest);
-  }
-  /// The side of `c` against face f alone, at its point nearest `c` (0 for none, or no face).
-  int sideAgainst(const Eigen::Vector3d& c, Index f) const {
-    if (f < 0) return 0;
-    const auto& t = triangles_[std::size_t(f)];
-    return sideAt(c, f, detail::closestOnTriangle(c, at(t[0]), at(t[1]), at(t[2])));
-  }
-  /// The side of `c` against the point `nearest` of face `bestFace`, along the pseudonormal of the feature it
-  /// lies on.
-  int sideAt(const Eigen::Vector3d& c, Index bestFace, const detail::ClosestOnTriangle& nearest) const {
-    using detail::TriangleFeature;
-    const auto& t = triangles_[std::size_t(bestFace)];
-    const Eigen::Vector3d& p = nearest.point;
-    Eigen::Vector3d normal = Eigen::Vector3d::Zero();
-    auto vertexNormal = [&](Index v) {  // angle-weighted, or none on the boundary
-      if (boundaryVertex_[std::size_t(v)]) return Eigen::Vector3d::Zero().eval();
-      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-      for (Index f : vertexFaces_[std::size_t(v)]) {
-        const auto& u = triangles_[std::size_t(f)];
-        const int k = u[0] == v ? 0 : (u[1] == v ? 1 : 2);
-        const Eigen::Vector3d e1 = at(u[std::size_t((k + 1) % 3)]) - at(v);
-        const Eigen::Vector3d e2 = at(u[std::size_t((k + 2) % 3)]) - at(v);
-        sum += std::acos(std::clamp(e1.normalized().dot(e2.normalized()), -1.0, 1.0)) * faceNormal(f);
-      }
-      return sum;
+    if (all.isEmpty()) return;
+    // Cells of at least 5 cm, at most 64 along a side.
+    const Eigen::Vector3d size = all.sizes();
+    const double cell = std::max({0.05, size.x() / 64, size.y() / 64});
+    const int nx = int(size.x() / cell) + 1, ny = int(size.y() / cell) + 1;
+    auto cellRange = [&](const Eigen::AlignedBox3d& box, int& i0, int& i1, int& j0, int& j1) {
+      i0 = std::clamp(int((box.min().x() - all.min().x()) / cell), 0, nx - 1);
+      i1 = std::clamp(int((box.max().x() - all.min().x()) / cell), 0, nx - 1);
+      j0 = std::clamp(int((box.min().y() - all.min().y()) / cell), 0, ny - 1);
+      j1 = std::clamp(int((box.max().y() - all.min().y()) / cell), 0, ny - 1);
     };
-    auto edgeNormal = [&](Index a, Index b) {  // the two faces' normals, or none on the boundary
-      if (boundaryEdges_.count({std::min(a, b), std::max(a, b)})) return Eigen::Vector3d::Zero().eval();
-      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-      for (Index f : vertexFaces_[std::size_t(a)]) {
-        const auto& u = triangles_[std::size_t(f)];
-        if (u[0] == b || u[1] == b || u[2] == b) sum += faceNormal(f);
+    start_.assign(std::size_t(nx * ny + 1), 0);
+    for (int pass = 0; pass < 2; ++pass) {  // count, then file
+      if (pass == 1) {
+        for (std::size_t k = 1; k < start_.size(); ++k) start_[k] += start_[k - 1];
+        filed_.resize(std::size_t(start_.back()));
+        fill_.assign(start_.begin(), start_.end() - 1);
       }
-      return sum;
-    };
-    switch (nearest.feature) {
-      case TriangleFeature::VertexA: normal = vertexNormal(t[0]); break;
-      case TriangleFeature::VertexB: normal = vertexNormal(t[1]); break;
-      case TriangleFeature::VertexC: normal = vertexNormal(t[2]); break;
-      case TriangleFeature::EdgeAB: normal = edgeNormal(t[0], t[1]); break;
-      case TriangleFeature::EdgeBC: normal = edgeNormal(t[1], t[2]); break;
-      case TriangleFeature::EdgeCA: normal = edgeNormal(t[2], t[0]); break;
-      case TriangleFeature::Face: normal = faceNormal(bestFace); break;
+      for (std::size_t f = 0; f < faces; ++f) {
+        int i0, i1, j0, j1;
+        cellRange(boxes_[f], i0, i1, j0, j1);
+        for (int j = j0; j <= j1; ++j)
+          for (int i = i0; i <= i1; ++i) {
+            const std::size_t c = std::size_t(j * nx + i);
+            if (pass == 0)
+              ++start_[c + 1];
+            else
+              filed_[std::size_t(fill_[c]++)] = Index(f);
+          }
+      }
     }
-    if (normal.squaredNorm() == 0) return 0;  // the boundary's: no side
-    const double s = normal.dot(c - p);
-    return s > 0 ? 1 : (s < 0 ? -1 : kOnSheet);
+    stamp_.assign(faces, -1);
+    for (std::size_t b = 0; b < c1_.size(); ++b) {
+      Eigen::AlignedBox3d path;
+      path.extend(c0_[b]).extend(c1_[b]);
+      if (!path.intersects(all)) continue;
+      times_.clear();
+      int i0, i1, j0, j1;
+      cellRange(path, i0, i1, j0, j1);
+      for (int j = j0; j <= j1; ++j)
+        for (int i = i0; i <= i1; ++i) {
+          const std::size_t c = std::size_t(j * nx + i);
+          for (int k = start_[c]; k < start_[c + 1]; ++k) {
+            const Index f = filed_[std::size_t(k)];
+            if (stamp_[std::size_t(f)] == int(b) || !boxes_[std::size_t(f)].intersects(path)) continue;
+            stamp_[std::size_t(f)] = int(b);
+            const auto& tri = triangles_[std::size_t(f)];
+            std::array<Eigen::Vector3d, 3> from, to;
+            for (std::size_t v = 0; v < 3; ++v) from[v] = x0_[std::size_t(tri[v])], to[v] = x1_[std::size_t(tri[v])];
+            int corner = 0;
+            const double t = meetTriangle(c0_[b], c1_[b], from, to, corner);
+            if (t < 0) continue;
+            times_.push_back({t, ring_[std::size_t(tri[std::size_t(corner)])]});
+          }
+        }
+      if (times_.empty()) continue;
+      // A path through an edge or a corner meets each face around it at once: one crossing.
+      std::sort(times_.begin(), times_.end());
+      if (!through_[b]) atBorder_[b] = times_.front().second <= 1;
+      through_[b] = true;
+      for (std::size_t k = 0; k < times_.size(); ++k) crossings_ += k == 0 || times_[k].first - times_[k - 1].first > 1e-9;
+    }
   }
+
   std::vector<std::array<Index, 3>> triangles_;
-  double margin_;
-  std::vector<std::vector<Index>> vertexFaces_;
-  std::set<std::pair<Index, Index>> boundaryEdges_;
-  std::vector<bool> boundaryVertex_;
   std::vector<int> ring_;  ///< each vertex's count of edges from the boundary
-  std::vector<Eigen::Vector3d> x_;
-  double longestEdge_ = 0;
-  std::vector<int> side_;
-  std::vector<Index> face_;  ///< each body's nearest face at the last reading
+  std::vector<Eigen::Vector3d> x0_, x1_;  ///< the sheet at the last reading and at this one
+  std::vector<Eigen::Vector3d> c0_, c1_;  ///< the bodies' centres, the same
+  std::size_t seen_ = 0;  ///< bodies at the last reading
+  std::vector<Eigen::AlignedBox3d> boxes_;  ///< each face's box over both readings
+  std::vector<int> start_, fill_;  ///< the grid's cells: where each one's faces start in filed_
+  std::vector<Index> filed_;
+  std::vector<int> stamp_;  ///< the last body each face was met with
+  std::vector<std::pair<double, int>> times_;  ///< a body's crossings: when, and the ring of the nearest corner
   std::vector<bool> through_;
   std::vector<bool> atBorder_;  ///< by body: first counted through at the border
   int crossings_ = 0;

@@ -236,8 +236,7 @@ nlohmann::ordered_json run(const Options& o, [[maybe_unused]] Painter* painter, 
   bool finite = true;
   // Bodies that passed through the cloth's sheet, watched substep by substep (SheetCrossings): before the release,
   // while the pinned cloth holds them, and after it.
-  drape::scenes::SheetCrossings sheet(cloth.asset(),
-                                     drape::scenes::SheetCrossings::marginFor(o.config.dt / o.config.subSteps));
+  drape::scenes::SheetCrossings sheet(cloth.asset());
   // Bodies under the cloth and bodies not over it, measured just before the release. A body is over the cloth
   // where its centre lies inside the outline of the cloth's boundary vertices in x, y (even-odd rule), and under
   // it where the centre is also below the cloth vertex nearest it in x, y: a body that fell past an edge the
@@ -281,9 +280,8 @@ nlohmann::ordered_json run(const Options& o, [[maybe_unused]] Painter* painter, 
   sheet.observe(cloth, world);
   for (int s = 1; s <= o.steps; ++s) {
     if (!scene.released() && scene.time() >= o.config.release - 1e-9) countUnderAndOff();
-    // The sheet is read after every substep, a body moving up to 8 mm between two readings: read once a step,
-    // a body under a fold or rounding a free edge can seem to have passed through (docs/design.md §10). The
-    // readings' time is left out of the step's.
+    // The sheet is read after every substep, where the straight paths the meter sweeps are the solver's own
+    // (docs/design.md §10). The readings' time is left out of the step's.
     double meterMs = 0;
     const auto t0 = Clock::now();
     scene.step([&](const auto&) {
