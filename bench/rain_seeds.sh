@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # The rain's contact figures over many seeds (docs/design.md, Known limits): the rigid_rain sample with 80 bodies,
 # its other settings at their defaults (300 steps of 0.01 s, the corners let go at 1.5 s), for each seed of a
-# range, one line per seed and the totals: bodies through the cloth (and of them those counted away from its border,
-# not rounding a free edge: SheetCrossings), the deepest cloth vertex in a body and in the floor (mm) with the runs
+# range, one line per seed and the totals: bodies through the cloth (and of them those that crossed it away from
+# its border: SheetCrossings), the deepest cloth vertex in a body and in the floor (mm) with the runs
 # beyond 1 mm, and the fastest cloth vertex. The runs are chaotic, so a change is judged over tens of
 # seeds, not a few. Needs jq (Debian `jq`) and a build with the samples.
 #
