@@ -12,8 +12,8 @@
 //
 // Vertices move in every substep's prediction and solve and while contacts are resolved. The velocity update and
 // every contact pass report how far the vertices they moved have got from where they were binned; the largest
-// such distance since the bins were built (the drift) grows each query by as much, and past half a cell the bins
-// are rebuilt.
+// such distance since the bins were built (the drift) grows each query by as much, and past a quarter of a cell
+// the bins are rebuilt (docs/design.md §13).
 
 #include <drape/math.hpp>
 
@@ -51,15 +51,15 @@ template <Scalar S> class VertexBins {
   void noteDrift(S d) { drift_ = std::max(drift_, d); }
   /// The positions the vertices were binned at.
   const Vec3<S>* binned() const { return binned_.data(); }
-  /// How many times the bins were built: what was measured against the binned positions holds while it stays.
-  std::uint64_t builds() const { return builds_; }
   /// The binned positions are so far from the current ones that queries would grow too much.
-  bool stale() const { return !(drift_ <= S(0.5) * cellUsed_); }
+  bool stale() const { return !(drift_ <= S(kStaleDrift) * cellUsed_); }
+  /// The drift, in cells, past which the bins are rebuilt: in the rain a quarter of a cell took a step 6-10 %
+  /// less than half of one, an eighth as long again (docs/design.md §13).
+  static constexpr double kStaleDrift = 0.25;
 
   /// Bins the vertices by their current positions and measures how far each vertex's faces reach from it.
   void build(const Vec3<S>* x, const std::vector<std::array<Index, 3>>& triangles) {
     drift_ = 0;
-    ++builds_;
     Vec3<S> lo = Vec3<S>::Constant(std::numeric_limits<S>::max()), hi = -lo;
     for (Index i = 0; i < vertexCount_; ++i) {
       binned_[std::size_t(i)] = x[i];
@@ -193,7 +193,6 @@ template <Scalar S> class VertexBins {
   }
 
   Index vertexCount_ = 0;
-  std::uint64_t builds_ = 0;
   S cell_ = 1, cellUsed_ = 1, inv_ = 1, maxReach_ = 0, drift_ = 0;
   Vec3<S> low_ = Vec3<S>::Zero();
   std::array<int, 3> dims_{1, 1, 1};

@@ -44,11 +44,11 @@ template <Scalar S> struct PassInputs {
 };
 
 template <Scalar S> class ContactPasses {
-  /// One solid's kept clearances (clearancesFor), with the bins' build, the solids' version and the thickness
+  /// One solid's kept clearances (clearancesFor), with the bins' reset, the solids' version and the thickness
   /// they hold for.
   struct Clearances {
     std::vector<S> faces;
-    std::uint64_t builds = 0, solidsVersion = 0;
+    std::uint64_t resets = 0, solidsVersion = 0;
     S thickness = 0;
   };
 
@@ -107,7 +107,12 @@ template <Scalar S> class ContactPasses {
       contacts_.begin();
       if (useBins_) {
         bins_.noteDrift(moveBound_);  // the prediction's and the solve's moves (updateVelocities)
-        if (!binsFresh_ || rebuild || bins_.stale()) bins_.build(in.x, in.triangles);
+        if (!binsFresh_ || rebuild) {
+          ++resets_;  // the binned positions no longer bound where the vertices have been: no clearance holds
+          bins_.build(in.x, in.triangles);
+        } else if (bins_.stale()) {
+          rebuildBins(in.x, in.triangles);
+        }
         binsFresh_ = true;
       }
       moveBound_ = 0;
@@ -190,10 +195,10 @@ template <Scalar S> class ContactPasses {
     if (clearances_.size() <= std::size_t(place)) clearances_.resize(std::size_t(place) + 1);
     Clearances& c = clearances_[std::size_t(place)];
     const std::size_t faces = in.triangles.size();
-    if (c.builds != bins_.builds() || c.solidsVersion != solidsVersion_ || c.thickness != in.thickness ||
+    if (c.resets != resets_ || c.solidsVersion != solidsVersion_ || c.thickness != in.thickness ||
         c.faces.size() != faces) {
       c.faces.assign(faces, -std::numeric_limits<S>::infinity());
-      c.builds = bins_.builds();
+      c.resets = resets_;
       c.solidsVersion = solidsVersion_;
       c.thickness = in.thickness;
     }
@@ -214,7 +219,7 @@ template <Scalar S> class ContactPasses {
     if (useBins_ && solid.bounded) {
       DRAPE_OMP(single)
       {
-        if (bins_.stale()) bins_.build(x, in.triangles);
+        if (bins_.stale()) rebuildBins(x, in.triangles);
         // A solid whose box holds most of the cloth (a ball it is draped over) visits every vertex and face, each
         // face behind its box check: the bins' lists would cost more than they save. Same contacts either way.
         whole_ = 2 * bins_.countNear(solid.boxLow, solid.boxHigh, thickness + reach) >= n;
@@ -277,6 +282,33 @@ template <Scalar S> class ContactPasses {
         }
       }
     }
+  }
+
+  /// Bins the vertices where they are now, the bins having drifted too far. A kept clearance held against the
+  /// binned positions; against the new ones it holds less each face's farthest corner's move between the two, so
+  /// the clearances survive the build (docs/design.md §13). Called by one thread.
+  void rebuildBins(const Vec3<S>* x, const std::vector<std::array<Index, 3>>& triangles) {
+    bool any = false;
+    for (const Clearances& c : clearances_) any |= c.resets == resets_ && !c.faces.empty();
+    if (any) {
+      const Vec3<S>* binned = bins_.binned();
+      for (std::size_t i = 0; i < gaps_.size(); ++i) gaps_[i] = (x[i] - binned[i]).squaredNorm();
+      for (Clearances& c : clearances_) {
+        if (c.resets != resets_ || c.faces.size() != triangles.size()) continue;
+        for (std::size_t f = 0; f < triangles.size(); ++f) {
+          S& clear = c.faces[f];
+          if (!(clear > S(0))) continue;  // none, or a face in contact at its last test (KeptClearance::kTouched)
+          const auto& t = triangles[f];
+          // Less four roundings of the clearance: the root's and the difference's, so that a clearance carried
+          // over many builds never grows past what it holds.
+          const S moved =
+              rootOf(std::max({gaps_[std::size_t(t[0])], gaps_[std::size_t(t[1])], gaps_[std::size_t(t[2])]}));
+          const S left = clear - moved - S(4) * std::numeric_limits<S>::epsilon() * clear;
+          clear = left > S(0) ? left : -std::numeric_limits<S>::infinity();
+        }
+      }
+    }
+    bins_.build(x, triangles);
   }
 
   static const Index* items(ItemList ids) { return ids.items; }
@@ -359,6 +391,7 @@ template <Scalar S> class ContactPasses {
   std::vector<Clearances> clearances_;  ///< by the solid's place among all the solids
   std::vector<HeldPoint<S>> held_;      ///< by face: where it was last deepest in a solid
   std::uint64_t solidsVersion_ = 0;
+  std::uint64_t resets_ = 0;  ///< bins built where no earlier binned position bounds the vertices (clearancesFor)
   bool keepClearances_ = false;  ///< this substep's passes may keep clearances (shared by the team)
   Clearances* kept_ = nullptr;   ///< the current solid's, or null (shared by the team)
   VertexBins<S> bins_;
