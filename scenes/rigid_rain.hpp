@@ -486,7 +486,8 @@ class SheetCrossings {
       std::sort(times_.begin(), times_.end());
       if (!through_[b]) atBorder_[b] = times_.front().second <= 1;
       through_[b] = true;
-      for (std::size_t k = 0; k < times_.size(); ++k) crossings_ += k == 0 || times_[k].first - times_[k - 1].first > 1e-9;
+      for (std::size_t k = 0; k < times_.size(); ++k)
+        crossings_ += k == 0 || times_[k].first - times_[k - 1].first > 1e-9;
     }
   }
 

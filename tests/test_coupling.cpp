@@ -828,9 +828,9 @@ TEST_CASE("the sheet-crossing meter's swept test against a brute force", "[coupl
 TEMPLATE_TEST_CASE("no body of the rain passes through its pinned cloth: continuous contact stops the fast ones",
                    "[coupling][continuous]", float, double) {
   // The rain's bodies land at up to 6 m/s, 6 mm per substep, more than the thickness. Without continuous contact
-  // the cloth lying on the floor lets some through before the corners are let go (this seed: 4 in float, 2 in double, read after
-  // every substep); the meter must see that, and with it on (the scene's default) none may pass there, at the
-  // border or away from it.
+  // the cloth lying on the floor lets some through before the corners are let go (this seed: 4 in float, 2 in
+  // double, read after every substep); the meter must see that, and with it on (the scene's default) none may pass
+  // there, at the border or away from it.
   auto run = [](bool continuous) {
     drape::scenes::RainConfig c;
     c.bodies = 80;
