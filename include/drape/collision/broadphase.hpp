@@ -53,8 +53,8 @@ template <Scalar S> class VertexBins {
   const Vec3<S>* binned() const { return binned_.data(); }
   /// The binned positions are so far from the current ones that queries would grow too much.
   bool stale() const { return !(drift_ <= S(kStaleDrift) * cellUsed_); }
-  /// The drift, in cells, past which the bins are rebuilt: in the rain a quarter of a cell took a step 6-10 %
-  /// less than half of one, an eighth as long again (docs/design.md §13).
+  /// The drift, in cells, past which the bins are rebuilt: in the rain the queries grown by the drift cost more
+  /// than building the bins more often, down to a quarter of a cell (docs/design.md §13).
   static constexpr double kStaleDrift = 0.25;
 
   /// Bins the vertices by their current positions and measures how far each vertex's faces reach from it.
