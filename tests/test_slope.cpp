@@ -252,6 +252,45 @@ RestRun restRun(drape::scenes::RestScene scene, int iterations, int seconds, dou
   return run;
 }
 
+/// A rest scene (scenes/rest_scenes.hpp) with the default method and 1 iteration at `substeps`, with still air at
+/// `airDamping` (1/s), from its own start and 7 more moved by up to half a cell (scenes::shiftOf). For each start,
+/// over the second that ends at `early` s the cloth still moves (the RMS speed of all vertices above 1e-4 m/s and
+/// some vertex spanning more than scenes::kStillSpan: the meters see the motion), and after `seconds` it is at rest
+/// (at most 1e-4 m/s) and still (no vertex spanning more than kStillSpan over the last second); printed as [rest]
+/// lines.
+template <class S>
+void checkRestFromEveryStart(drape::scenes::RestScene scene, int substeps, double airDamping, int early,
+                             int seconds) {
+  for (int placement = 0; placement < 8; ++placement) {
+    drape::scenes::Distance distance;
+    auto solver = drape::scenes::makeRestScene<S>(scene, CollisionMethod::Faces, substeps, distance,
+                                                  drape::scenes::shiftOf(placement));
+    drape::Settings settings = solver.settings();
+    settings.airDamping = airDamping;
+    solver.setSettings(settings);
+    double earlyRms = 0, earlySpan = 0;
+    drape::scenes::FrameSpan span;
+    for (int f = 1; f <= seconds * 60; ++f) {
+      solver.step(1.0 / 60.0);
+      if ((f > (early - 1) * 60 && f <= early * 60) || f > (seconds - 1) * 60) span.add(solver);
+      if (f == early * 60) earlyRms = drape::scenes::rmsSpeed(solver), earlySpan = span.largest(), span.clear();
+    }
+    const double late = drape::scenes::rmsSpeed(solver), lateSpan = span.largest();
+    std::printf("[rest] %s, start %d, %d substeps, 1 iteration, still air %g/s (%s): RMS speed after %d s %.2e m/s, "
+                "after %d s %.2e m/s; span over second %d %.2e mm, over second %d %.2e mm\n",
+                drape::scenes::name(scene), placement, substeps, airDamping, sizeof(S) == 4 ? "float" : "double",
+                early, earlyRms, seconds, late, early, earlySpan * 1e3, seconds, lateSpan * 1e3);
+    INFO(drape::scenes::name(scene) << ", start " << placement << ": RMS speed of all vertices after " << early
+                                    << " s " << earlyRms << " m/s, after " << seconds << " s " << late
+                                    << " m/s; span over second " << early << " " << earlySpan << " m, over second "
+                                    << seconds << " " << lateSpan << " m");
+    CHECK(earlyRms > 1e-4);
+    CHECK(earlySpan > drape::scenes::kStillSpan);
+    CHECK(late <= 1e-4);
+    CHECK(lateSpan <= drape::scenes::kStillSpan);
+  }
+}
+
 TEMPLATE_TEST_CASE("at 2 substeps a cloth hanging over a ball comes to rest from every start", "[rest]", float,
                    double) {
   // A 40x40 cloth (2 cm) dropped on a 0.2 m ball, mu 0.5 (scenes/rest_scenes.hpp), from its own start and from 7
@@ -264,28 +303,7 @@ TEMPLATE_TEST_CASE("at 2 substeps a cloth hanging over a ball comes to rest from
   // Where a viewer sees it (scenes::FrameSpan), some vertex spans 13-23 mm over the tenth second and 1.5-5.5 um over
   // the fortieth.
   if (drape::test::kSanitized) return;  // 8 x 4800 substeps: the physics, not memory, is what this tests
-  for (int placement = 0; placement < 8; ++placement) {
-    drape::scenes::Distance distance;
-    auto solver = drape::scenes::makeRestScene<TestType>(drape::scenes::RestScene::Ball, CollisionMethod::Faces, 2,
-                                                         distance, drape::scenes::shiftOf(placement));
-    double early = 0, earlySpan = 0;
-    drape::scenes::FrameSpan span;
-    for (int f = 1; f <= 40 * 60; ++f) {
-      solver.step(1.0 / 60.0);
-      if ((f > 9 * 60 && f <= 10 * 60) || f > 39 * 60) span.add(solver);
-      if (f == 10 * 60) early = drape::scenes::rmsSpeed(solver), earlySpan = span.largest(), span.clear();
-    }
-    const double late = drape::scenes::rmsSpeed(solver), lateSpan = span.largest();
-    std::printf("[rest] ball, start %d, 2 substeps, 1 iteration (%s): RMS speed after 10 s %.2e m/s, after 40 s "
-                "%.2e m/s; span over the tenth second %.2e mm, over the fortieth %.2e mm\n",
-                placement, sizeof(TestType) == 4 ? "float" : "double", early, late, earlySpan * 1e3, lateSpan * 1e3);
-    INFO("start " << placement << ": RMS speed of all vertices after 10 s " << early << " m/s, after 40 s " << late
-                  << "; span over the tenth second " << earlySpan << " m, over the fortieth " << lateSpan << " m");
-    CHECK(early > 1e-4);  // the meters see the skirt's swing
-    CHECK(earlySpan > drape::scenes::kStillSpan);
-    CHECK(late <= 1e-4);
-    CHECK(lateSpan <= drape::scenes::kStillSpan);
-  }
+  checkRestFromEveryStart<TestType>(drape::scenes::RestScene::Ball, 2, 0.0, 10, 40);
 }
 
 TEMPLATE_TEST_CASE("at 2 substeps and 4 solver iterations a cloth on a ridge comes to rest", "[rest]", float, double) {
@@ -336,31 +354,7 @@ TEMPLATE_TEST_CASE("at 10 substeps in still air a cloth hanging over a 3 mm rod 
   // from every start (build/bench/rest_drift --placements 8 --scenes rod --air-damping 3 20 N; docs/design.md,
   // Known limits), while 10 substeps cost there 1.6 (float) and 2.1 (double) times what 2 do.
   if (drape::test::kSanitized) return;  // 8 x 12000 substeps: the physics, not memory, is what this tests
-  for (int placement = 0; placement < 8; ++placement) {
-    drape::scenes::Distance distance;
-    auto solver = drape::scenes::makeRestScene<TestType>(drape::scenes::RestScene::Rod, CollisionMethod::Faces, 10,
-                                                         distance, drape::scenes::shiftOf(placement));
-    drape::Settings settings = solver.settings();
-    settings.airDamping = 3;
-    solver.setSettings(settings);
-    double early = 0, earlySpan = 0;
-    drape::scenes::FrameSpan span;
-    for (int f = 1; f <= 20 * 60; ++f) {
-      solver.step(1.0 / 60.0);
-      if ((f > 4 * 60 && f <= 5 * 60) || f > 19 * 60) span.add(solver);
-      if (f == 5 * 60) early = drape::scenes::rmsSpeed(solver), earlySpan = span.largest(), span.clear();
-    }
-    const double late = drape::scenes::rmsSpeed(solver), lateSpan = span.largest();
-    std::printf("[rest] 3 mm rod, start %d, 10 substeps, still air 3/s (%s): RMS speed after 5 s %.2e m/s, after "
-                "20 s %.2e m/s; span over the fifth second %.2e mm, over the twentieth %.2e mm\n",
-                placement, sizeof(TestType) == 4 ? "float" : "double", early, late, earlySpan * 1e3, lateSpan * 1e3);
-    INFO("start " << placement << ": RMS speed of all vertices after 5 s " << early << " m/s, after 20 s " << late
-                  << "; span over the fifth second " << earlySpan << " m, over the twentieth " << lateSpan << " m");
-    CHECK(early > 1e-4);  // the meters see the halves swing
-    CHECK(earlySpan > drape::scenes::kStillSpan);
-    CHECK(late <= 1e-4);
-    CHECK(lateSpan <= drape::scenes::kStillSpan);
-  }
+  checkRestFromEveryStart<TestType>(drape::scenes::RestScene::Rod, 10, 3.0, 5, 20);
 }
 
 TEMPLATE_TEST_CASE("air damping: a falling cloth's speed follows v0 exp(-c t) + g (1 - exp(-c t)) / c",
