@@ -6,7 +6,8 @@
 // the deepest point: on a convex solid Kelley's cutting planes (each tangent plane bounds the field from below
 // along the face, so the search stops once the best value is certified), on a grid field branch and bound with
 // bounds from the cells' trilinear polynomials. Where that point is closer than the thickness, the face's
-// vertices move along the normal, weighted by barycentric weight and inverse mass, to carry it to the thickness.
+// vertices move along the normal, weighted by barycentric weight (spread toward an even lift on fields with edges)
+// and inverse mass, to carry it to the thickness.
 // The moves are recorded in the vertices' contacts (recordContact, as the CPU records them). With continuous contact
 // (docs/design.md §18), a face that travelled far is first searched along its path (sweepFace); that code is
 // compiled only into the kernels of a scene with continuous contact (DRAPE_SWEEP), as a uniform branch around it
@@ -833,8 +834,13 @@ void main() {
   }
 #endif
 
-  // Move the face's vertices (projectFaceContactsAs).
-  precise const vec3 wb = vec3(a.w * qb.x, b.w * qb.y, c.w * qb.z);
+  // Move the face's vertices (projectFaceContactsAs), the shares spread where deepest points are held.
+#if DRAPE_HOLDS_DEEPEST_POINTS
+  const float spread = DRAPE_FACE_SPREAD;
+#else
+  const float spread = 0.0;
+#endif
+  precise const vec3 wb = vec3(a.w * (qb.x + spread), b.w * (qb.y + spread), c.w * (qb.z + spread));
   precise const float denom = dot3(wb, qb);
   if (denom <= 0.0) return;
 #if DRAPE_SHAPE == DRAPE_SHAPE_SPHERE

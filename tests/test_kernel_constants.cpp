@@ -40,6 +40,7 @@ TEST_CASE("every shared constant reaches the shaders as the float the CPU kernel
                {"DRAPE_CORNER_DETERMINANT", c::kCornerDeterminant},
                {"DRAPE_REACH", c::kReach},
                {"DRAPE_FACE_MOVE_CAP", c::kFaceMoveCap},
+               {"DRAPE_FACE_SPREAD", c::kFaceSpread},
                {"DRAPE_EIGEN_NEGLIGIBLE", c::kEigenNegligible},
                {"DRAPE_FACE_SEARCH_GAP", c::kFaceSearchGap},
                {"DRAPE_HELD_POINT_SLACK", c::kHeldPointSlack},

@@ -93,8 +93,12 @@ inline constexpr double kFeatureMinRate = 0.05;
 /// No corner of a face moves more than this many times the depth its deepest point is pushed: where the face's
 /// free corners carry little of that point (its other corners pinned, or far heavier), the exact move, depth /
 /// b, grows without bound as their weight b goes to 0. A uniform sheet's faces never reach it (at most 1.37
-/// with equal masses, 1.82 where one corner has a third of the others' mass).
+/// with equal masses, 1.82 where one corner has a third of the others' mass; with kFaceSpread 1.11 and 2.02).
 inline constexpr double kFaceMoveCap = 3;
+/// On a field with edges and sides, corner k of a face contact takes a share w_k (b_k + kFaceSpread) of the push,
+/// not the least-norm w_k b_k: a face lying along an edge or a side is about as deep along a segment of itself,
+/// and pushed from one end of it alone it tilts until the other end is deepest, a two-substep cycle.
+inline constexpr double kFaceSpread = 1;
 
 // Continuous contact (docs/design.md §18).
 /// A vertex whose path in a substep, relative to a solid, is shorter than this share of the thickness is left to

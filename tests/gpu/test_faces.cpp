@@ -160,7 +160,12 @@ void compareFacePass(Place&& place, float normalTolerance = 1e-6f, float depthTo
   CHECK(drape::test::largestDifference(x, state.x) <= largestMove);
   // Each face's search ends after a handful of evaluations on a certificate, so a bit of difference in one
   // field value could move a vertex by a rounding of its correction (1e-9 m): 4 ulp at the 0.3 m cloth.
-  CHECK(drape::test::largestDifference(gpuPositions, x) <= 4 * 1.2e-7 * 0.3);
+  // A move of length L along normals whose two sides' values differ by up to normalTolerance ends up to
+  // normalTolerance L apart, and later faces' searches start from there: on the grid fields, where the normals
+  // differ most, a corner pushed by several faces in turn has moved up to 13 cm when the torus is pressed 2 cm in.
+  const double moved = drape::test::largestDifference(x, state.x);
+  const double moveGap = 4 * 1.2e-7 * 0.3 + normalTolerance * moved;
+  CHECK(drape::test::largestDifference(gpuPositions, x) <= moveGap);
   int compared = 0, multiSlot = 0;
   double worstNormal = 0, worstDepth = 0;
   for (Index i = 0; i < asset.vertexCount(); ++i) {
@@ -178,7 +183,7 @@ void compareFacePass(Place&& place, float normalTolerance = 1e-6f, float depthTo
       INFO("slot " << s);
       worstNormal = std::max(worstNormal, double((Vec3<float>(rec.normal[s][0], rec.normal[s][1], rec.normal[s][2]) - slot.normal).norm()));
       worstDepth = std::max(worstDepth, double(std::abs(rec.normal[s][3] - slot.correction)));
-      CHECK(std::abs(rec.normal[s][3] - slot.correction) <= 1e-6f * slot.correction + depthTolerance);
+      CHECK(std::abs(rec.normal[s][3] - slot.correction) <= 1e-6f * slot.correction + depthTolerance + moveGap);
       for (int a = 0; a < 3; ++a) CHECK(std::abs(rec.normal[s][a] - slot.normal[a]) <= normalTolerance);
       CHECK(std::abs(rec.velocity[s][3] - slot.offset) <= std::max(1e-6f, 0.3f * normalTolerance));
       CHECK(rec.friction[s][0] == slot.staticFriction);
@@ -373,7 +378,10 @@ TEST_CASE("collide_faces: the held deepest points read and written over two pass
       }
     const int taken = int(stats.faceContacts) - replaced;
     INFO(stats.faceContacts << " face contacts; " << taken << " held points taken, " << replaced << " replaced");
-    REQUIRE(stats.faceContacts >= 100);
+    // Enough faces in contact to read the held points by. A face's push lifts its corners about evenly over the
+    // top (kFaceSpread), which leaves fewer later faces in contact than the least-norm push did (over 100): 91 and
+    // 89 in the two passes.
+    REQUIRE(stats.faceContacts >= 80);
     // The first colour's faces over the top are level when their turn comes (later colours share a corner that
     // an earlier face moved), so each of them takes its held point: the seeded one, then the one the first pass
     // wrote.

@@ -642,7 +642,8 @@ template <Scalar S> S faceContactSlack(S thickness, const Vec3<S>& point) {
 }
 /// For every face: cull by bounding sphere (when kCull), find the deepest point by PGD, and if it is closer
 /// than `thickness` by more than faceContactSlack, move the face's vertices, weighted by barycentric weight and
-/// inverse mass (dx_i = w_i b_i / sum_j w_j b_j^2 * depth * n), so that point reaches the thickness. Visits the
+/// inverse mass (dx_i = w_i c_i / sum_j w_j c_j b_j * depth * n, c = b on balls and capsules and b + kFaceSpread
+/// on fields with edges), so that point reaches the thickness. Visits the
 /// faces `ids` (count of them) in order. Returns the largest distance of a moved vertex from `binned`. Serial:
 /// neighbouring faces share vertices.
 ///
@@ -787,8 +788,13 @@ S projectFaceContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, int p
       }
       h = {q.barycentric, held.place};
     }
-    const Vec3<S> wb(invMass[t[0]] * q.barycentric[0], invMass[t[1]] * q.barycentric[1],
-                     invMass[t[2]] * q.barycentric[2]);
+    // Corner k moves wb_k / denom times the depth, which carries the deepest point to the thickness. Where faces
+    // lie along edges and sides (the fields whose deepest points are held), the shares are spread toward an even
+    // lift (kFaceSpread), so that a face along an edge is not tilted about one end of it (docs/design.md §4,
+    // "Spread shares"); a ball's or a capsule's push keeps its line through the centre or the axis.
+    constexpr S spread = kHoldsDeepestPoints<Sdf<Shape, S>> ? S(constants::kFaceSpread) : S(0);
+    const Vec3<S> wb(invMass[t[0]] * (q.barycentric[0] + spread), invMass[t[1]] * (q.barycentric[1] + spread),
+                     invMass[t[2]] * (q.barycentric[2] + spread));
     const S denom = wb.dot(q.barycentric);
     if (denom <= S(0)) continue;
     ++counts.faceContacts;
@@ -800,9 +806,9 @@ S projectFaceContactsAs(const CompiledSolid<Shape, S>& solid, S thickness, int p
       depth = featureAlignedPush(solid.sdf, x[t[0]], x[t[1]], x[t[2]], thickness, depth, q, extra);
       counts.sdfEvaluations += extra;
     }
-    // Corner k moves wb_k / denom times the depth: unbounded where the free corners carry little of the deepest
-    // point (a body pressing a hammock beside its pinned border threw the next row 0.6 m in one substep). Capped
-    // at kFaceMoveCap times the depth, the point is cleared over several substeps instead.
+    // The moves are unbounded where the free corners carry little of the deepest point (a body pressing a
+    // hammock beside its pinned border threw the next row 0.6 m in one substep). Capped at kFaceMoveCap times
+    // the depth, the point is cleared over several substeps instead.
     const S most = std::max({wb[0], wb[1], wb[2]}) / denom;
     if (most > S(constants::kFaceMoveCap)) depth *= S(constants::kFaceMoveCap) / most;
     const Vec3<S> placed = movedAlong(q.point, depth, q.normal);  // the moves below carry the deepest point there

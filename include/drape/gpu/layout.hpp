@@ -306,6 +306,7 @@ inline std::string preamble(const std::string& defines = {}) {
   s += define("DRAPE_CORNER_DETERMINANT", constants::kCornerDeterminant);
   s += define("DRAPE_REACH", constants::kReach);
   s += define("DRAPE_FACE_MOVE_CAP", constants::kFaceMoveCap);
+  s += define("DRAPE_FACE_SPREAD", constants::kFaceSpread);
   s += define("DRAPE_LEAST_SQUARES_PASSES", constants::kLeastSquaresPasses);
   s += define("DRAPE_EXACT_POINT_SLACK", constants::kExactPointSlack);
   s += define("DRAPE_BACKED_COS", constants::kBackedCos);
