@@ -10,6 +10,7 @@
 // undoableStep: the slope (faces, 10 substeps) stepped with an observer that may throw, so each step keeps its
 // start to be undone, against a noexcept one.
 // keptSpin: the slope and the ball scene without and with Settings::keepAngularMomentum.
+// hungByCorners: a sheet hanging from its four pinned corners without and with Settings::tethers.
 #include "slope.hpp"
 
 #include <benchmark/benchmark.h>
@@ -240,6 +241,30 @@ void keptSpin(benchmark::State& state) {
   }
 }
 
+/// What Settings::tethers costs (docs/design.md §1), on one thread: a 50 x 80 sheet (2 cm) hung by its four corners,
+/// 10 substeps, after 1 s of falling into its hammock; tethers 0 off, 1 on.
+void hungByCorners(benchmark::State& state) {
+  drape::Settings settings;
+  settings.tethers = state.range(0) != 0;
+  settings.threadCount = 1;
+  drape::SheetDesc sheet;
+  sheet.nx = 50;
+  sheet.ny = 80;
+  sheet.spacing = 0.02;
+  sheet.placement.position = {0, 0, 0.5};
+  drape::Solver<float> solver(
+      std::make_shared<const drape::ClothAsset<float>>(drape::ClothAsset<float>::sheet(sheet)), settings, 0.1);
+  for (const drape::Index i : {0, 49, 79 * 50, 80 * 50 - 1}) solver.pin(i);
+  for (int f = 0; f < 100; ++f) solver.step(0.01);
+  for (auto _ : state) {
+    solver.step(0.01);
+    benchmark::ClobberMemory();
+  }
+  state.counters["vertex_substep"] =
+      benchmark::Counter(double(solver.vertexCount()) * settings.subStepCount,
+                         benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+}
+
 void substepsAndIterations(benchmark::internal::Benchmark* b) {
   b->ArgNames({"substeps", "iterations"})->Args({5, 1})->Args({10, 1})->Args({5, 5})->Unit(benchmark::kMillisecond);
 }
@@ -302,6 +327,8 @@ BENCHMARK(capsuleScene)
 
 // scene 0: the slope, 1: the ball; keep 1: Settings::keepAngularMomentum on.
 BENCHMARK(keptSpin)->ArgNames({"scene", "keep"})->ArgsProduct({{0, 1}, {0, 1}})->Unit(benchmark::kMillisecond);
+
+BENCHMARK(hungByCorners)->ArgNames({"tethers"})->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 

@@ -258,6 +258,24 @@ template <Scalar S, class ClothSolver = Solver<S>> class RigidRain {
   /// Body k's shape kind (body k of world()).
   const std::vector<RainShape>& kinds() const { return kinds_; }
 
+  /// The scene's mechanical energy (J): the dynamic bodies' and the free cloth vertices' kinetic energy and their
+  /// gravitational potential above the floor (z = 0). Nothing does work on the scene (the pinned corners stand
+  /// still, the floor is fixed), so it never rises above its start.
+  double mechanicalEnergy() const {
+    double e = world_.kineticEnergy();
+    for (int b = 0; b < world_.bodyCount(); ++b) {
+      const auto& body = world_.body(b);
+      if (body.isDynamic())
+        e -= body.massProperties().mass * world_.settings().gravity.dot(body.state.pose.position);
+    }
+    const Eigen::Vector3d g = cloth_.settings().gravity;
+    for (Index i = 0; i < cloth_.vertexCount(); ++i) {
+      const double w = double(cloth_.state().invMass[i]);
+      if (w > 0) e += (0.5 * cloth_.velocity(i).squaredNorm() - g.dot(cloth_.position(i))) / w;
+    }
+    return e;
+  }
+
  private:
   static std::shared_ptr<const ClothAsset<S>> makeAsset(const RainConfig& c) {
     SheetDesc grid;

@@ -7,6 +7,7 @@
 #include <drape/cloth/integrate.hpp>
 #include <drape/cloth/spin.hpp>
 #include <drape/cloth/state.hpp>
+#include <drape/cloth/tethers.hpp>
 #include <drape/collision/broadphase.hpp>
 #include <drape/collision/passes.hpp>
 #include <drape/collision/pgd.hpp>
@@ -87,7 +88,7 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
   void loadState() const {}
   void storeState(StateChange change) {
     if (change == StateChange::Positions) passes_.positionsReplaced();
-    if (change == StateChange::Masses) massesChanged_ = true;  // the lane copies are gathered again
+    if (change == StateChange::Masses) massesChanged_ = tethersStale_ = true;  // the lane copies, the tethers
   }
   void keepStart() {
     startX_ = state_.x;
@@ -242,6 +243,8 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
           }, keepSpin_);
         }
       }
+      if (tethering_)
+        teamFor(vertexCount(), [&](Index b, Index e) { applyTethers(b, e, tethers_, xw); });
       if (inSolve) {  // contacts inside the solve, on the unpacked positions
         unpack(x, xw);
         collideInSolve(h, S(settings_.thickness));
@@ -555,6 +558,9 @@ template <Scalar S, class... Shapes> class BasicSolver : public SolverFront<Basi
   FrictionPaths<S> guardPaths_;           ///< the faces friction moved far this substep, for the guard
   S travel_ = 0;              ///< the substep's farthest vertex travel (shared by the team)
   bool massesChanged_ = false;  ///< an inverse mass changed since the lane copies were gathered
+  Tethers<S> tethers_;          ///< Settings::tethers: each free vertex's, for the inverse masses when built
+  bool tethersStale_ = true;    ///< an inverse mass changed since the tethers were built
+  bool tethering_ = false;      ///< tethers act this substep
   std::vector<Vec3<S>> vStart_, vPre_;                  ///< velocities at the substep's start, before contacts
   std::vector<coupling::BodySums> bodySums_;  ///< what each coupled body's exchange and pinches add up to
   std::vector<coupling::Exchanged> exchanged_;  ///< the vertices in an exchange, and its body
@@ -574,6 +580,11 @@ template <Scalar S, class... Shapes> void BasicSolver<S, Shapes...>::subStep(dou
     gatherLaneMasses();
     massesChanged_ = false;
   }
+  if (settings_.tethers && tethersStale_) {
+    tethers_.build(*asset_, state_.invMass.data());
+    tethersStale_ = false;
+  }
+  tethering_ = settings_.tethers && !tethers_.empty();
   passes_.resetStats();
   spinExternal_ = {};  // this substep's own; one an exception cut short leaves nothing behind
   const int threads = settings_.threadCount == 0 ? hardwareThreads() : settings_.threadCount;

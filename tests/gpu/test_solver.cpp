@@ -325,6 +325,10 @@ TEST_CASE("the GPU solver rejects bad settings and solids before changing anythi
   keep.keepAngularMomentum = true;
   CHECK_THROWS_WITH(gpu.setSettings(keep), Catch::Contains("keepAngularMomentum"));
   CHECK_FALSE(gpu.settings().keepAngularMomentum);
+  drape::Settings tethered = parts.settings;
+  tethered.tethers = true;
+  CHECK_THROWS_WITH(gpu.setSettings(tethered), Catch::Contains("tethers"));
+  CHECK_FALSE(gpu.settings().tethers);
   CHECK_THROWS_WITH(drape::gpu::Solver(drape::test::gpuContext(), parts.asset, noCulling),
                     Catch::Contains("culling"));
   CHECK(gpu.settings().culling);

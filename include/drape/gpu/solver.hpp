@@ -191,6 +191,8 @@ class Solver : public SolverFront<Solver, float, DRAPE_BUILT_IN_SHAPES> {
                                               "Settings::exactGridSearch = false is not supported");
     drape::detail::require(!s.keepAngularMomentum, "the GPU solver does not yet restore the solve's angular "
                                                    "momentum: Settings::keepAngularMomentum = true is not supported");
+    drape::detail::require(!s.tethers, "the GPU solver does not yet run tethers: Settings::tethers = true is not "
+                                       "supported");
     drape::detail::require(s.broadPhase,
                            "the GPU solver always culls by bounding box: Settings::broadPhase = false is not supported");
     drape::detail::require(s.threadCount == 1, [&] {
