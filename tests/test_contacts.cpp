@@ -199,7 +199,7 @@ TEMPLATE_TEST_CASE("a point pinched between two nearly facing planes goes to the
   CHECK(r0 == Approx(0.00065).margin(1e-5));  // half the total violation each
 }
 
-TEMPLATE_TEST_CASE("a face whose corners sit at the thickness on a flat side is no contact; one a little deeper is",
+TEMPLATE_TEST_CASE("a face whose corners sit at the thickness on a flat side is no contact, one a little deeper is",
                    "[contacts]", float, double) {
   // Corners placed at the thickness by their own vertex contacts leave the face's deepest point a few roundings
   // either side of it. Taken as a contact, such a face paid the push, three records and the response for

@@ -273,7 +273,7 @@ template <class Field> Vec finiteDifference(const Field& f, const Vec& x, double
 
 // --- Declarations and validation -----------------------------------------------------------------------------
 
-TEST_CASE("cylinder dimensions are checked, naming the field; a hull without faces is refused", "[convexsdf]") {
+TEST_CASE("cylinder dimensions are checked, naming the field, a hull without faces is refused", "[convexsdf]") {
   STATIC_REQUIRE(!Sdf<Cylinder, float>::kLinear);
   STATIC_REQUIRE(Sdf<Cylinder, double>::kConvex);
   STATIC_REQUIRE(!Sdf<ConvexHull, double>::kLinear);

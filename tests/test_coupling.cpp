@@ -480,7 +480,7 @@ TEMPLATE_TEST_CASE("a very heavy body is not moved by the cloth, which slides of
   CHECK(meanCoupled <= 1.1 * meanFixed);  // no trembling from the coupling: a tremble shows in every sample
 }
 
-TEST_CASE("Fig 6.5: a cloth launches a light ball; the three estimators' launch heights", "[coupling]") {
+TEST_CASE("Fig 6.5: a cloth launches a light ball, the three estimators' launch heights", "[coupling]") {
   // A 0.4 m cloth pinned along two opposite edges, made springy (stretch compliance 1e-3 m/N); a 20 g ball
   // falls 0.3 m onto it, and the cloth throws it back up. Reported: the top of its flight after the bounce.
   // Asserted: the cloth, not the ground, stops each fall; each estimator throws the ball back up at least a third

@@ -324,7 +324,7 @@ template <class S> void gridMesh(int n, double spacing, std::vector<drape::Vec3<
 
 }  // namespace
 
-TEMPLATE_TEST_CASE("degenerate input meshes are rejected naming the triangle; near-degenerate ones are stable",
+TEMPLATE_TEST_CASE("degenerate input meshes are rejected naming the triangle, near-degenerate ones are stable",
                    "[stability]", float, double) {
   using S = TestType;
   using Asset = drape::ClothAsset<S>;

@@ -268,7 +268,7 @@ TEST_CASE("the sign is right around acute edges and vertices, where a face norma
 
 // --- Sampling inside the grid --------------------------------------------------------------------------------
 
-TEMPLATE_TEST_CASE("sampled field: error within a fraction of a cell, falling with resolution; sign beyond it",
+TEMPLATE_TEST_CASE("sampled field: error within a fraction of a cell, falling with resolution, sign beyond it",
                    "[meshsdf]", float, double) {
   using S = TestType;
   const double nearBand = 0.05;  // m: "near the surface", where cloth meets the solid
@@ -424,7 +424,7 @@ TEMPLATE_TEST_CASE("sampled normals match the analytic gradients away from edges
   }
 }
 
-TEMPLATE_TEST_CASE("sampled field is 1-Lipschitz along axes and at most sqrt(3)-Lipschitz; gradients are unit",
+TEMPLATE_TEST_CASE("sampled field is 1-Lipschitz along axes and at most sqrt(3)-Lipschitz, gradients are unit",
                    "[meshsdf]", float, double) {
   using S = TestType;
   std::mt19937_64 rng(9);
@@ -586,7 +586,7 @@ struct TempDir {
 };
 }  // namespace
 
-TEST_CASE("OBJ files: a saved mesh loads back the same; quads are split; errors name the file", "[meshsdf]") {
+TEST_CASE("OBJ files: a saved mesh loads back the same, quads are split, errors name the file", "[meshsdf]") {
   const TempDir dir;
   SECTION("round trip") {
     const TriangleMesh torus = makeTorus(0.4, 0.15, 24, 12);

@@ -106,7 +106,7 @@ TEST_CASE("culling skips most faces while the cloth is in the air", "[culling]")
   CHECK(worst > 0.95);
 }
 
-TEMPLATE_TEST_CASE("in-solve trembles where a fold touches two walls; faces is at least 10 times calmer",
+TEMPLATE_TEST_CASE("in-solve trembles where a fold touches two walls, faces is at least 10 times calmer",
                    "[trembling]", float, double) {
   // The condition found: a cloth folded into a frictionless 45 degree V gutter, 10 substeps, 5 iterations.
   // On a single plane or slope neither method trembles (the test above), so this is where the comparison is.

@@ -90,7 +90,7 @@ TEMPLATE_TEST_CASE("tethers leave a flat pinned cloth where it lies", "[tethers]
   CHECK(moved <= 1e-6);
 }
 
-TEST_CASE("tethers follow the pins: let go, a cloth is tethered no more; the same bits on one thread and two",
+TEST_CASE("tethers follow the pins: let go, a cloth is tethered no more, the same bits on one thread and two",
           "[tethers][threads]") {
   // The tethers are built again whenever an inverse mass changes. Let go at 0.5 s, the corners fall with the rest:
   // the cloth's centre of mass then falls at g, which a tether still pulling toward a freed corner would change (it
