@@ -8,7 +8,6 @@
 #include <drape/cloth/asset.hpp>
 #include <drape/math.hpp>
 
-#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <queue>
@@ -35,17 +34,6 @@ template <Scalar S> struct Tethers {
   /// vertex nearer than the cloth itself would let it be. Anchors that no edge path reaches give no tether.
   void build(const ClothAsset<S>& asset, const S* invMass) {
     const Index n = Index(asset.restPositions.size());
-    // The edges' rest lengths, by vertex (the asset's adjacency carries no lengths).
-    std::vector<Index> offsets(std::size_t(n) + 1, 0);
-    for (const auto& e : asset.edges) ++offsets[std::size_t(e[0]) + 1], ++offsets[std::size_t(e[1]) + 1];
-    for (Index i = 0; i < n; ++i) offsets[std::size_t(i) + 1] += offsets[std::size_t(i)];
-    std::vector<std::pair<Index, double>> next(offsets.back());
-    std::vector<Index> fill(offsets.begin(), offsets.end() - 1);
-    for (const auto& e : asset.edges) {
-      const double l = (asset.restPositions[e[0]] - asset.restPositions[e[1]]).template cast<double>().norm();
-      next[std::size_t(fill[std::size_t(e[0])]++)] = {e[1], l};
-      next[std::size_t(fill[std::size_t(e[1])]++)] = {e[0], l};
-    }
     // Each vertex's nearest anchors, settled in order of distance: (distance, vertex, anchor).
     using Entry = std::tuple<double, Index, Index>;
     std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> open;
@@ -63,9 +51,10 @@ template <Scalar S> struct Tethers {
       auto& mine = nearest[std::size_t(v)];
       if (int(mine.size()) >= kTethersPerVertex || holds(v, a)) continue;
       mine.emplace_back(a, d);
-      for (Index k = offsets[std::size_t(v)]; k < offsets[std::size_t(v) + 1]; ++k) {
-        const auto [u, l] = next[std::size_t(k)];
-        if (int(nearest[std::size_t(u)].size()) < kTethersPerVertex && !holds(u, a)) open.emplace(d + l, u, a);
+      for (const Index* u = asset.vertexNeighbours.begin(v); u != asset.vertexNeighbours.end(v); ++u) {
+        if (int(nearest[std::size_t(*u)].size()) >= kTethersPerVertex || holds(*u, a)) continue;
+        const double l = (asset.restPositions[*u] - asset.restPositions[v]).template cast<double>().norm();
+        open.emplace(d + l, *u, a);
       }
     }
     start.assign(1, 0);
