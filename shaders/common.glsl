@@ -224,35 +224,65 @@ void symmetricEigen3(inout float a[3][3], out float v[3][3]) {
       }
 }
 
-// leastSquaresCompromise's twin: DRAPE_LEAST_SQUARES_PASSES passes, each the violated planes' least-squares move
-// along the eigen-directions of sum_k n_k n_k^T whose eigenvalue is at least 1 / reach^2.
+// leastSquaresMove's twin: one pass of the compromise from y, over the planes y violates; one or two planes in
+// closed form (p + q and p - q, eigenvalues |p + q|^2 / 2 and |p - q|^2 / 2), three by Jacobi rotations.
+vec3 leastSquaresMove(vec3 n[DRAPE_CONTACT_SLOTS], float b[DRAPE_CONTACT_SLOTS], int count, vec3 y, float weakest) {
+  int violated = 0;
+  int which[DRAPE_CONTACT_SLOTS];
+  float r[DRAPE_CONTACT_SLOTS];
+  for (int k = 0; k < count; ++k) {
+    precise const float rk = b[k] - dot3(n[k], y);
+    if (rk > 0.0) {
+      which[violated] = k;
+      r[violated] = rk;
+      ++violated;
+    }
+  }
+  if (violated == 0) return vec3(0.0);
+  if (violated == 1) {
+    const vec3 p = n[which[0]];
+    precise const float length2 = dot3(p, p);
+    precise const vec3 along = (r[0] / length2) * p;
+    return length2 >= weakest ? along : vec3(0.0);
+  }
+  precise vec3 move = vec3(0.0);
+  if (violated == 2) {
+    const vec3 p = n[which[0]], q = n[which[1]];
+    precise const vec3 sum = p + q, difference = p - q;
+    precise const float sum2 = dot3(sum, sum), difference2 = dot3(difference, difference);
+    if (sum2 >= 2.0 * weakest) move = move + ((r[0] + r[1]) / sum2) * sum;
+    if (difference2 >= 2.0 * weakest) move = move + ((r[0] - r[1]) / difference2) * difference;
+    return move;
+  }
+  float a[3][3] = float[3][3](float[3](0.0, 0.0, 0.0), float[3](0.0, 0.0, 0.0), float[3](0.0, 0.0, 0.0));
+  float v[3][3];
+  precise vec3 g = vec3(0.0);
+  for (int m = 0; m < violated; ++m) {
+    const vec3 nk = n[which[m]];
+    g = g + r[m] * nk;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) {
+        precise const float aij = a[i][j] + nk[i] * nk[j];
+        a[i][j] = aij;
+      }
+  }
+  symmetricEigen3(a, v);
+  for (int i = 0; i < 3; ++i) {
+    if (!(a[i][i] >= weakest)) continue;
+    const vec3 e = vec3(v[0][i], v[1][i], v[2][i]);
+    precise const float along = dot3(e, g) / a[i][i];
+    move = move + along * e;
+  }
+  return move;
+}
+
+// leastSquaresCompromise's twin: DRAPE_LEAST_SQUARES_PASSES passes of leastSquaresMove, the cut at 1 / reach^2.
 vec3 leastSquaresCompromise(vec3 n[DRAPE_CONTACT_SLOTS], float b[DRAPE_CONTACT_SLOTS], int count, vec3 from,
                             float reach) {
-  precise const float kWeakest = 1.0 / (reach * reach);
+  precise const float weakest = 1.0 / (reach * reach);
   vec3 y = from;
   for (int pass = 0; pass < DRAPE_LEAST_SQUARES_PASSES; ++pass) {
-    float a[3][3] = float[3][3](float[3](0.0, 0.0, 0.0), float[3](0.0, 0.0, 0.0), float[3](0.0, 0.0, 0.0));
-    float v[3][3];
-    precise vec3 g = vec3(0.0);
-    for (int k = 0; k < count; ++k) {
-      precise const float r = b[k] - dot3(n[k], y);
-      if (!(r > 0.0)) continue;
-      g = g + r * n[k];
-      for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j) {
-          precise const float aij = a[i][j] + n[k][i] * n[k][j];
-          a[i][j] = aij;
-        }
-    }
-    symmetricEigen3(a, v);
-    precise vec3 move = vec3(0.0);
-    for (int i = 0; i < 3; ++i) {
-      if (!(a[i][i] >= kWeakest)) continue;
-      const vec3 e = vec3(v[0][i], v[1][i], v[2][i]);
-      precise const float along = dot3(e, g) / a[i][i];
-      move = move + along * e;
-    }
-    precise const vec3 next = y + move;
+    precise const vec3 next = y + leastSquaresMove(n, b, count, y, weakest);
     y = next;
   }
   return y;

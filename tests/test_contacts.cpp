@@ -177,6 +177,83 @@ TEMPLATE_TEST_CASE("the eigen-decomposition of a 3x3 normal matrix agrees with E
   CHECK(worst <= tolerance);
 }
 
+TEMPLATE_TEST_CASE("a pass of the least-squares compromise is its definition's move, in closed form for one or "
+                   "two planes", "[contacts][pinch]", float, double) {
+  using S = TestType;
+  using V = drape::Vec3<S>;
+  // The move is the sum over the eigen-directions e of sum_k n_k n_k^T (the violated planes) whose eigenvalue is at
+  // least 1/reach^2 of (e . g / lambda) e, g = sum_k r_k n_k: here in double with Eigen's solver, against the
+  // closed forms for one and two violated planes and the Jacobi rotations for three. Nearly facing and nearly
+  // equal pairs, pairs whose difference sits near the cut, and points that leave one, two or three planes violated.
+  // A trial whose violated set or cut rounding could decide is left out (the two sides may choose differently).
+  std::mt19937 rng(11);
+  std::normal_distribution<double> g;
+  std::uniform_real_distribution<double> u(-0.004, 0.004);
+  const double reach = drape::constants::kReach, weakest = 1 / (reach * reach);
+  // Relative to the violations (at most 8 mm), divided by the weakest eigenvalue kept: float's roundings of the
+  // normals' products, and in double the rotations' residue (an off-diagonal entry up to kEigenNegligible).
+  const double tolerance = std::is_same_v<S, float> ? 1e-5 : 1e-10;
+  double worst = 0;
+  int byCount[4] = {}, nearCut = 0;
+  for (int trial = 0; trial < 4000; ++trial) {
+    const int count = 1 + trial % 3;
+    V n[3];
+    S b[3];
+    for (int k = 0; k < count; ++k) {
+      Eigen::Vector3d d(g(rng), g(rng), g(rng));
+      d.normalize();
+      if (k == 1 && trial % 5 == 1) d = (-n[0].template cast<double>() + 0.05 * d).normalized();  // nearly facing
+      if (k == 1 && trial % 5 == 3) d = (n[0].template cast<double>() + 0.01 * d).normalized();   // nearly equal
+      if (k == 1 && trial % 5 == 4) {  // 1 - cos near 1/reach^2: the difference's eigenvalue near the cut
+        const Eigen::Vector3d a = n[0].template cast<double>(), side = a.cross(d).normalized().cross(a);
+        const double angle = std::acos(1 - weakest) * (1 + 0.02 * g(rng));
+        d = std::cos(angle) * a + std::sin(angle) * side;
+      }
+      n[k] = d.cast<S>();
+      b[k] = S(u(rng));
+    }
+    const V y(S(u(rng)), S(u(rng)), S(u(rng)));
+    const Eigen::Vector3d yd = y.template cast<double>();
+    Eigen::Matrix3d a = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d gs = Eigen::Vector3d::Zero();
+    int violated = 0;
+    bool ambiguous = false;
+    for (int k = 0; k < count; ++k) {
+      const Eigen::Vector3d nk = n[k].template cast<double>();
+      const double r = double(b[k]) - nk.dot(yd);
+      ambiguous |= std::abs(r) < 1e-6;
+      if (r <= 0) continue;
+      ++violated;
+      gs += r * nk;
+      a += nk * nk.transpose();
+    }
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(a);
+    Eigen::Vector3d move = Eigen::Vector3d::Zero();
+    double smallest = 1;
+    for (int i = 0; i < 3; ++i) {
+      const double lambda = eigen.eigenvalues()[i];
+      ambiguous |= std::abs(lambda - weakest) < 1e-4;
+      if (lambda < weakest) continue;
+      smallest = std::min(smallest, lambda);
+      const Eigen::Vector3d e = eigen.eigenvectors().col(i);
+      move += (e.dot(gs) / lambda) * e;
+    }
+    if (ambiguous) continue;
+    ++byCount[violated];
+    nearCut += trial % 5 == 4 && violated == 2;
+    const V got = drape::leastSquaresMove(n, b, count, y, S(weakest));
+    worst = std::max(worst, (got.template cast<double>() - move).norm() * smallest / 0.008);
+  }
+  INFO("largest difference " << worst << " (of the largest violation, times the weakest eigenvalue kept); points "
+                             << "with 0, 1, 2 and 3 planes violated: " << byCount[0] << ", " << byCount[1] << ", "
+                             << byCount[2] << ", " << byCount[3] << ", " << nearCut << " pairs near the cut");
+  CHECK(byCount[1] > 300);
+  CHECK(byCount[2] > 300);
+  CHECK(byCount[3] > 100);
+  CHECK(nearCut > 50);
+  CHECK(worst <= tolerance);
+}
+
 TEMPLATE_TEST_CASE("a point pinched between two nearly facing planes goes to the middle of the gap, not sideways",
                    "[contacts][pinch]", float, double) {
   using S = TestType;

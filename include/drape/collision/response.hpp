@@ -915,6 +915,52 @@ template <Scalar S> void symmetricEigen3(S (&a)[3][3], S (&v)[3][3]) {
       }
 }
 
+/// One pass of leastSquaresCompromise from y: over the planes y violates, sum_k r_k n_k resolved along the
+/// eigen-directions of sum_k n_k n_k^T whose eigenvalue is at least `weakest`. One or two planes (most pinches: a
+/// body over the floor) in closed form: for unit normals p and q the eigen-directions in their plane are p + q and
+/// p - q, with eigenvalues |p + q|^2 / 2 and |p - q|^2 / 2, and the move along each is (r_p +- r_q) (p +- q) /
+/// |p +- q|^2. Jacobi rotations for three: the sweeps' roots and divisions were most of the settle's time in a
+/// rain of bodies, where nearly every pinch is two planes.
+template <Scalar S> Vec3<S> leastSquaresMove(const Vec3<S>* n, const S* b, int count, const Vec3<S>& y, S weakest) {
+  int violated = 0, which[ContactBuffer<S>::kSlots];
+  S r[ContactBuffer<S>::kSlots];
+  for (int k = 0; k < count; ++k) {
+    const S rk = b[k] - n[k].dot(y);
+    if (rk > S(0)) which[violated] = k, r[violated++] = rk;
+  }
+  if (violated == 0) return Vec3<S>::Zero();
+  if (violated == 1) {
+    const Vec3<S>& p = n[which[0]];
+    const S length2 = p.squaredNorm();
+    return length2 >= weakest ? Vec3<S>((r[0] / length2) * p) : Vec3<S>::Zero();
+  }
+  Vec3<S> move = Vec3<S>::Zero();
+  if (violated == 2) {
+    const Vec3<S>& p = n[which[0]];
+    const Vec3<S>& q = n[which[1]];
+    const Vec3<S> sum = p + q, difference = p - q;
+    const S sum2 = sum.squaredNorm(), difference2 = difference.squaredNorm();
+    if (sum2 >= S(2) * weakest) move += ((r[0] + r[1]) / sum2) * sum;
+    if (difference2 >= S(2) * weakest) move += ((r[0] - r[1]) / difference2) * difference;
+    return move;
+  }
+  S a[3][3] = {}, v[3][3];
+  Vec3<S> g = Vec3<S>::Zero();  // sum_k r_k n_k over the violated planes
+  for (int m = 0; m < violated; ++m) {
+    const Vec3<S>& nk = n[which[m]];
+    g += r[m] * nk;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) a[i][j] += nk[i] * nk[j];
+  }
+  symmetricEigen3(a, v);
+  for (int i = 0; i < 3; ++i) {
+    if (!(a[i][i] >= weakest)) continue;
+    const Vec3<S> e(v[0][i], v[1][i], v[2][i]);
+    move += (e.dot(g) / a[i][i]) * e;
+  }
+  return move;
+}
+
 /// The least-squares compromise for a point that no nearby point puts outside all of up to three half-spaces
 /// n_k . y >= b_k (a cloth pinched in a gap narrower than twice its thickness): from `from`, the violated planes'
 /// least-squares move along the directions they determine well. Two nearly facing planes pin the point along
@@ -927,27 +973,9 @@ template <Scalar S> void symmetricEigen3(S (&a)[3][3], S (&v)[3][3]) {
 template <Scalar S>
 Vec3<S> leastSquaresCompromise(const Vec3<S>* n, const S* b, int count, const Vec3<S>& from,
                                double reach = constants::kReach) {
-  const S kWeakest = S(1 / (reach * reach));
+  const S weakest = S(1 / (reach * reach));
   Vec3<S> y = from;
-  for (int pass = 0; pass < constants::kLeastSquaresPasses; ++pass) {
-    S a[3][3] = {}, v[3][3];
-    Vec3<S> g = Vec3<S>::Zero();  // sum_k r_k n_k over the violated planes
-    for (int k = 0; k < count; ++k) {
-      const S r = b[k] - n[k].dot(y);
-      if (!(r > S(0))) continue;
-      g += r * n[k];
-      for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j) a[i][j] += n[k][i] * n[k][j];
-    }
-    symmetricEigen3(a, v);
-    Vec3<S> move = Vec3<S>::Zero();
-    for (int i = 0; i < 3; ++i) {
-      if (!(a[i][i] >= kWeakest)) continue;
-      const Vec3<S> e(v[0][i], v[1][i], v[2][i]);
-      move += (e.dot(g) / a[i][i]) * e;
-    }
-    y += move;
-  }
+  for (int pass = 0; pass < constants::kLeastSquaresPasses; ++pass) y += leastSquaresMove(n, b, count, y, weakest);
   return y;
 }
 
