@@ -520,7 +520,7 @@ bool searchFace(vec3 x0, vec3 x1, vec3 x2, float margin, out vec3 qb, out vec3 q
       bool full = false;
       for (int i = 0; i < vertices; ++i) {
         const vec3 u = poly[i];
-        const vec3 v = poly[(i + 1) % vertices];
+        const vec3 v = poly[i + 1 == vertices ? 0 : i + 1];
         precise const float su = dot3(hk, u), sv = dot3(hk, v);
         if (outCount + 2 > kMaxVertices) {
           full = true;

@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <limits>
+#include <utility>
 
 namespace drape {
 
@@ -213,7 +214,7 @@ FaceQuery<S> deepestPointOnFace(const Field& sdf, const Vec3<S>& x0, const Vec3<
   bool exact = true;
   // Clipping a convex polygon adds at most one vertex per cut; the slack covers rounding.
   constexpr int kMaxVertices = 2 * kMaxCuts + 6;
-  Vec3<S> poly[kMaxVertices], clipped[kMaxVertices];
+  Vec3<S> polyStore[kMaxVertices], clippedStore[kMaxVertices];
   // A face resting on the solid has its minimum at the floor itself (a vertex just placed at the thickness):
   // the certificate must clear the floor by more than rounding, or such a contact could be lost.
   const S stop = floor + tolerance;
@@ -236,21 +237,27 @@ FaceQuery<S> deepestPointOnFace(const Field& sdf, const Vec3<S>& x0, const Vec3<
     }
     // The model's new minimum lies on the new cut (the old minimum violates it): minimise the new cut over
     // the part of the triangle where it is the highest.
+    // The polygon and its clipped copy trade places after each cut; each vertex's side of the cut is computed
+    // once, and the next vertex's index without an integer division.
+    Vec3<S>* poly = polyStore;
+    Vec3<S>* clipped = clippedStore;
     int vertices = 3;
     for (int k = 0; k < 3; ++k) poly[k] = Vec3<S>::Unit(k);
     for (int k = 0; k < count && vertices > 0; ++k) {
       const Vec3<S> h = c - cuts[k];
       int out = 0;
+      S su = h.dot(poly[0]);
       for (int i = 0; i < vertices; ++i) {
         const Vec3<S>& u = poly[i];
-        const Vec3<S>& v = poly[(i + 1) % vertices];
-        const S su = h.dot(u), sv = h.dot(v);
+        const Vec3<S>& v = poly[i + 1 == vertices ? 0 : i + 1];
+        const S sv = h.dot(v);
         if (out + 2 > kMaxVertices) break;
         if (su >= S(0)) clipped[out++] = u;
         if ((su >= S(0)) != (sv >= S(0))) clipped[out++] = u + (su / (su - sv)) * (v - u);
+        su = sv;
       }
       vertices = out + 2 > kMaxVertices ? 0 : out;  // (rounding made a mess: give up, keep the best)
-      std::copy(clipped, clipped + out, poly);
+      std::swap(poly, clipped);
     }
     if (vertices == 0) break;
     cuts[count++] = c;
