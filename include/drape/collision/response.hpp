@@ -919,8 +919,8 @@ template <Scalar S> void symmetricEigen3(S (&a)[3][3], S (&v)[3][3]) {
 /// eigen-directions of sum_k n_k n_k^T whose eigenvalue is at least `weakest`. One or two planes (most pinches: a
 /// body over the floor) in closed form: for unit normals p and q the eigen-directions in their plane are p + q and
 /// p - q, with eigenvalues |p + q|^2 / 2 and |p - q|^2 / 2, and the move along each is (r_p +- r_q) (p +- q) /
-/// |p +- q|^2. Jacobi rotations for three: the sweeps' roots and divisions were most of the settle's time in a
-/// rain of bodies, where nearly every pinch is two planes.
+/// |p +- q|^2. Jacobi rotations for three: their sweeps' roots and divisions had been 13 % of a rain of bodies'
+/// step (docs/design.md §16).
 template <Scalar S> Vec3<S> leastSquaresMove(const Vec3<S>* n, const S* b, int count, const Vec3<S>& y, S weakest) {
   int violated = 0, which[ContactBuffer<S>::kSlots];
   S r[ContactBuffer<S>::kSlots];

@@ -147,14 +147,21 @@ template <Scalar S> struct Sdf<ConvexHull, S> {
   Mat3<S> toLocal;  ///< rotation world -> hull body frame
   Vec3<S> centre;   ///< body frame origin (the hull's centre of mass)
   std::shared_ptr<const detail::HullField<S>> hull;
+  /// Hulls of up to this many faces keep their plane distances between the two loops of a query.
+  static constexpr int kKeptPlanes = 64;
 
   S operator()(const Vec3<S>& x, Vec3<S>& gradient) const {
     const Vec3<S> q = toLocal * (x - centre);
     const auto& faces = hull->faces;
+    // The planes' distances, kept for the outside search below where the hull is small enough (most are).
+    S kept[kKeptPlanes];
+    const bool keep = faces.size() <= std::size_t(kKeptPlanes);
     std::size_t front = 0;  // the face whose plane q is farthest in front of (least behind)
     S frontDistance = faces[0].normal.dot(q) - faces[0].offset;
+    kept[0] = frontDistance;
     for (std::size_t f = 1; f < faces.size(); ++f) {
       const S s = faces[f].normal.dot(q) - faces[f].offset;
+      if (keep) kept[f] = s;
       if (s > frontDistance) front = f, frontDistance = s;
     }
     if (frontDistance <= S(0)) {  // inside or on the surface: the nearest plane
@@ -169,8 +176,9 @@ template <Scalar S> struct Sdf<ConvexHull, S> {
     Vec3<S> bestDelta = Vec3<S>::Zero();  // q - the nearest candidate so far
     const auto* edges = hull->edges.data();
     const S slack = hull->nearSurface;  // a face whose region holds q may seem a little farther than it is
-    for (const auto& face : faces) {
-      const S s = face.normal.dot(q) - face.offset;
+    for (std::size_t f = 0; f < faces.size(); ++f) {
+      const auto& face = faces[f];
+      const S s = keep ? kept[f] : face.normal.dot(q) - face.offset;
       if (!(s > S(0)) || (s > slack && (s - slack) * (s - slack) >= bestSq)) continue;
       const auto* e = edges + face.firstEdge;
       bool inPolygon = true;
