@@ -153,7 +153,8 @@ template <Scalar S> struct Sdf<ConvexHull, S> {
   S operator()(const Vec3<S>& x, Vec3<S>& gradient) const {
     const Vec3<S> q = toLocal * (x - centre);
     const auto& faces = hull->faces;
-    // The planes' distances, kept for the outside search below where the hull is small enough (most are).
+    // The planes' distances, kept for the outside search below where the hull is small enough (most are). The
+    // GLSL twin reads them again from its buffer: the same bits, without a private array on the GPU.
     S kept[kKeptPlanes];
     const bool keep = faces.size() <= std::size_t(kKeptPlanes);
     std::size_t front = 0;  // the face whose plane q is farthest in front of (least behind)
